@@ -1,0 +1,1 @@
+"""Actions with ROS 2 semantics, without ROS: goals, feedback, cancellation, results."""

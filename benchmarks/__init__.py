@@ -1,0 +1,1 @@
+"""Benchmarks of the controller: QP timing and episode quality."""
