@@ -1,0 +1,29 @@
+# Two commands on a fresh machine: `make demo` (the high five in simulation) and `make test`.
+# Both create .venv and install what they need on first use.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed-stamp
+
+.PHONY: install demo test bench bench-full lint
+
+$(STAMP): pyproject.toml scripts/setup.sh
+	PYTHON=$(PYTHON) bash scripts/setup.sh
+	touch $(STAMP)
+
+install: $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/go2-wbc stand-pd
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+bench: $(STAMP)
+	$(BIN)/python -m benchmarks.qp_timing --quick
+
+bench-full: $(STAMP)
+	$(BIN)/python -m benchmarks.qp_timing
+
+lint: $(STAMP)
+	$(BIN)/python -m ruff check .

@@ -1,0 +1,107 @@
+"""The GO2 MuJoCo scene, built from the same URDF as the Pinocchio model."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+import mujoco
+import numpy as np
+
+from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, Go2Description
+from wbc.errors import ConfigurationError
+from wbc.validation import as_float, check_name
+
+#: Collision groups: robot geoms touch the floor but not each other.
+_ROBOT_CONTYPE, _ROBOT_CONAFFINITY = 2, 1
+_FLOOR_CONTYPE, _FLOOR_CONAFFINITY = 1, 2
+
+
+def build_go2_spec(
+    description: Go2Description | None = None,
+    *,
+    timestep_s: float = 1e-3,
+    floor_friction: float = 1.0,
+    actuator_order: Sequence[str] | None = None,
+) -> mujoco.MjSpec:
+    """A MuJoCo spec of the GO2 on a flat floor, ready to compile.
+
+    The URDF's collision meshes are kept (its ``.dae`` visuals, which MuJoCo cannot read,
+    are dropped); each foot mesh is replaced by a sphere of radius :data:`FOOT_RADIUS_M`
+    centred on the foot frame; the base floats on a free joint; one torque motor per joint
+    has the URDF effort limit as its control range.
+
+    Args:
+        description: The robot files; found from the installed example-robot-data by default.
+        timestep_s: Physics timestep [s].
+        floor_friction: Sliding friction coefficient between the feet and the floor.
+        actuator_order: Joint names in the order the actuators are listed (description order
+            by default); another order, e.g. the Unitree SDK's, is wired by name.
+    """
+    description = description or Go2Description()
+    timestep_s = as_float("timestep_s", timestep_s, low=1e-5, high=0.01)
+    floor_friction = as_float("floor_friction", floor_friction, low=0.0, high=5.0,
+                              low_inclusive=False)
+    order = list(JOINT_NAMES if actuator_order is None else actuator_order)
+    for name in order:
+        check_name("joint", name, JOINT_NAMES)
+    if sorted(order) != sorted(JOINT_NAMES):
+        raise ConfigurationError(
+            f"actuator_order: expected each of the 12 GO2 joints once, received {order}"
+        )
+
+    text = description.urdf_path.read_text()
+    text = re.sub(r"<visual>.*?</visual>", "", text, flags=re.S)
+    text = text.replace(description.mesh_uri_prefix(), f"{description.folder}/")
+    spec = mujoco.MjSpec.from_string(text)
+    spec.compiler.fusestatic = False  # keep the base and the foot bodies
+    spec.option.timestep = timestep_s
+    # Elliptic cones with a high impedance ratio keep the feet from creeping tangentially.
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = 10.0
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+
+    spec.body("base").add_freejoint(name="root")
+
+    for geom in spec.geoms:
+        geom.contype, geom.conaffinity = _ROBOT_CONTYPE, _ROBOT_CONAFFINITY
+    for leg, frame in FOOT_FRAMES.items():
+        foot = spec.body(frame)
+        for geom in list(foot.geoms):
+            spec.delete(geom)
+        foot.add_geom(
+            name=f"{leg}_foot_sphere",
+            type=mujoco.mjtGeom.mjGEOM_SPHERE,
+            size=[FOOT_RADIUS_M, 0, 0],
+            contype=_ROBOT_CONTYPE,
+            conaffinity=_ROBOT_CONAFFINITY,
+            condim=3,
+            friction=[floor_friction, 0.005, 0.0001],
+            # Stiff, well-damped contact: 5 ms time constant at critical damping.
+            solref=[0.005, 1.0],
+            solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
+            mass=0,
+        )
+
+    world = spec.worldbody
+    world.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[0, 0, 0.05],
+        contype=_FLOOR_CONTYPE,
+        conaffinity=_FLOOR_CONAFFINITY,
+        friction=[floor_friction, 0.005, 0.0001],
+        rgba=[0.75, 0.78, 0.8, 1.0],
+    )
+    world.add_light(pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
+
+    effort = dict(zip(JOINT_NAMES, description.effort_limit))
+    for name in order:
+        spec.add_actuator(
+            name=name.removesuffix("_joint"),
+            target=name,
+            trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            ctrllimited=True,
+            ctrlrange=[-effort[name], effort[name]],
+        )
+    return spec

@@ -1,0 +1,173 @@
+"""The GO2 in MuJoCo: reset to a pose, step with joint torques, read the state and foot forces."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from sim.scene import build_go2_spec
+from wbc.conventions import mujoco_to_pin, pin_to_mujoco
+from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
+from wbc.errors import ConfigurationError
+from wbc.joint_map import JointMap
+from wbc.validation import as_float, as_vector, check_name
+
+
+@dataclass
+class _Push:
+    body_id: int
+    force_n: np.ndarray
+    torque_nm: np.ndarray
+    end_s: float
+
+
+class Go2Simulator:
+    """A MuJoCo plant of the GO2, spoken to in the description's conventions.
+
+    Torques go in and states come out in the description's joint order and in Pinocchio's
+    conventions (see :mod:`wbc.conventions`); the plant's own actuator order may differ and is
+    wired by name.
+
+    Example:
+        >>> sim = Go2Simulator()
+        >>> sim.reset("standing")
+        >>> q, v = sim.state()
+        >>> sim.step(np.zeros(12))
+    """
+
+    def __init__(
+        self,
+        *,
+        timestep_s: float = 1e-3,
+        floor_friction: float = 1.0,
+        actuator_order: Sequence[str] | None = None,
+        description: Go2Description | None = None,
+    ):
+        """Args:
+            timestep_s: Physics timestep [s].
+            floor_friction: Foot-floor sliding friction coefficient.
+            actuator_order: Joint names in the plant's actuator order (description order by
+                default).
+            description: The robot files (found automatically by default).
+        """
+        self.description = description or Go2Description()
+        self.spec = build_go2_spec(self.description, timestep_s=timestep_s,
+                                   floor_friction=floor_friction, actuator_order=actuator_order)
+        self.model = self.spec.compile()
+        self.data = mujoco.MjData(self.model)
+        #: Plant actuator order <-> description order.
+        self.actuator_map = JointMap(
+            [self.model.joint(self.model.actuator_trnid[i, 0]).name for i in range(self.model.nu)]
+        )
+        jnt_names = [self.model.joint(i).name for i in range(1, self.model.njnt)]
+        if jnt_names != list(JOINT_NAMES):
+            raise ConfigurationError(f"MuJoCo joint order {jnt_names} differs from {JOINT_NAMES}")
+        self._foot_geom = {
+            leg: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"{leg}_foot_sphere")
+            for leg in LEGS
+        }
+        self._floor_geom = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+        self._pushes: list[_Push] = []
+        self._force6 = np.zeros(6)
+        self.reset("standing")
+
+    @property
+    def time_s(self) -> float:
+        """Simulated time [s]."""
+        return float(self.data.time)
+
+    @property
+    def timestep_s(self) -> float:
+        """Physics timestep [s]."""
+        return float(self.model.opt.timestep)
+
+    def reset(self, pose: str | np.ndarray = "standing", v: np.ndarray | None = None) -> None:
+        """Reset time to zero and the robot to a named pose or a configuration (19,)."""
+        q = self.description.pose(pose) if isinstance(pose, str) else as_vector("q", pose, 19)
+        v = np.zeros(18) if v is None else as_vector("v", v, 18)
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[:], self.data.qvel[:] = pin_to_mujoco(q, v)
+        self._pushes.clear()
+        mujoco.mj_forward(self.model, self.data)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q (19,), v (18,))`` in Pinocchio convention, description order."""
+        return mujoco_to_pin(self.data.qpos, self.data.qvel)
+
+    def step(self, tau: np.ndarray, n_steps: int = 1) -> None:
+        """Apply joint torques [N m] (description order) and advance ``n_steps`` timesteps.
+
+        Torques beyond the actuators' control range are clipped by MuJoCo, as a motor
+        driver saturates.
+        """
+        self.step_actuators(self.actuator_map.to_other(as_vector("tau", tau, 12)), n_steps)
+
+    def step_actuators(self, ctrl: np.ndarray, n_steps: int = 1) -> None:
+        """Apply torques in the plant's own actuator order and advance ``n_steps`` timesteps."""
+        self.data.ctrl[:] = as_vector("ctrl", ctrl, self.model.nu)
+        for _ in range(n_steps):
+            self._apply_pushes()
+            mujoco.mj_step(self.model, self.data)
+
+    def apply_force(
+        self,
+        force_n: Sequence[float],
+        duration_s: float,
+        *,
+        body: str = "base",
+        torque_nm: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        """Apply a world-frame force [N] (and torque [N m]) at a body's centre of mass.
+
+        The force starts now and lasts ``duration_s`` of simulated time; several may overlap.
+        """
+        body_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, body)
+        if body_id < 0:
+            bodies = [self.model.body(i).name for i in range(1, self.model.nbody)]
+            check_name("body", body, bodies)
+        self._pushes.append(_Push(
+            body_id=body_id,
+            force_n=as_vector("force_n", force_n, 3),
+            torque_nm=as_vector("torque_nm", torque_nm, 3),
+            end_s=self.time_s + as_float("duration_s", duration_s, low=0.0),
+        ))
+
+    def _apply_pushes(self) -> None:
+        self.data.xfrc_applied[:] = 0.0
+        now = self.time_s
+        self._pushes = [p for p in self._pushes if p.end_s > now + 1e-12]
+        for push in self._pushes:
+            self.data.xfrc_applied[push.body_id, :3] += push.force_n
+            self.data.xfrc_applied[push.body_id, 3:] += push.torque_nm
+
+    def foot_contact_forces(self) -> dict[str, np.ndarray]:
+        """World-frame force [N] the floor exerts on each foot (zero when not touching)."""
+        forces = {leg: np.zeros(3) for leg in LEGS}
+        geom_leg = {g: leg for leg, g in self._foot_geom.items()}
+        for i in range(self.data.ncon):
+            contact = self.data.contact[i]
+            pair = (contact.geom1, contact.geom2)
+            if self._floor_geom not in pair:
+                continue
+            other = pair[1] if pair[0] == self._floor_geom else pair[0]
+            leg = geom_leg.get(other)
+            if leg is None:
+                continue
+            mujoco.mj_contactForce(self.model, self.data, i, self._force6)
+            # The contact frame's first row is the normal, pointing from geom1 to geom2; the
+            # force acts on geom2 along +normal.
+            world = contact.frame.reshape(3, 3).T @ self._force6[:3]
+            forces[leg] += world if contact.geom2 == other else -world
+        return forces
+
+    def foot_positions(self) -> dict[str, np.ndarray]:
+        """World position [m] of each foot frame (the foot sphere's centre)."""
+        return {
+            leg: self.data.xpos[
+                mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, frame)
+            ].copy()
+            for leg, frame in FOOT_FRAMES.items()
+        }

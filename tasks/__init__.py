@@ -1,0 +1,1 @@
+"""Acceleration-level tasks for whole-body control: error, Jacobian and drift from Pinocchio."""

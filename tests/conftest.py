@@ -1,0 +1,29 @@
+"""Shared fixtures: the GO2 description and model are loaded once per test session."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from wbc.description import Go2Description
+
+
+@pytest.fixture(scope="session")
+def description() -> Go2Description:
+    return Go2Description()
+
+
+@pytest.fixture(scope="session")
+def model(description: Go2Description) -> pin.Model:
+    return description.model
+
+
+def random_configuration(model: pin.Model, rng: np.random.Generator, scale: float = 0.4,
+                         base: np.ndarray | None = None) -> np.ndarray:
+    """A configuration on the manifold: a standing pose moved by a random tangent vector."""
+    q0 = Go2Description().pose("standing") if base is None else base
+    dq = rng.uniform(-scale, scale, model.nv)
+    q = pin.integrate(model, q0, dq)
+    q[7:] = np.clip(q[7:], model.lowerPositionLimit[7:], model.upperPositionLimit[7:])
+    return q

@@ -1,0 +1,105 @@
+"""The MuJoCo plant agrees with the Pinocchio model, stands under a joint PD, and takes pushes."""
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from sim.simulator import Go2Simulator
+from tests.conftest import random_configuration
+from wbc.description import FOOT_FRAMES, JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
+from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.joint_pd_controller import JointPdController
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return Go2Simulator()
+
+
+def test_mass_and_limits_agree(sim, description):
+    assert sim.model.body_mass.sum() == pytest.approx(description.total_mass, rel=0.01)
+    np.testing.assert_allclose(sim.model.actuator_ctrlrange[:, 1], description.effort_limit)
+    np.testing.assert_allclose(sim.model.jnt_range[1:, 0], description.position_lower)
+    assert sim.timestep_s == 1e-3
+
+
+def test_foot_positions_agree_at_random_configurations(sim, model):
+    data = model.createData()
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for _ in range(20):
+        q = random_configuration(model, rng, scale=1.0)
+        sim.reset(q)
+        pin.framesForwardKinematics(model, data, q)
+        for leg, p_mj in sim.foot_positions().items():
+            p_pin = data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation
+            worst = max(worst, np.linalg.norm(p_pin - p_mj))
+    assert worst < 1e-3
+
+
+def test_state_round_trip_preserves_pose_and_joint_order(sim, model):
+    rng = np.random.default_rng(11)
+    q = random_configuration(model, rng, scale=0.5)
+    v = rng.normal(size=18)
+    sim.reset(q, v)
+    q2, v2 = sim.state()
+    np.testing.assert_allclose(q2, q, atol=1e-12)
+    np.testing.assert_allclose(v2, v, atol=1e-12)
+    for i, name in enumerate(JOINT_NAMES):
+        assert sim.data.qpos[7 + i] == pytest.approx(q[7 + i])
+        assert sim.model.joint(1 + i).name == name
+
+
+def test_actuators_in_sdk_order_are_wired_by_name():
+    sim = Go2Simulator(actuator_order=UNITREE_SDK_JOINT_NAMES)
+    assert sim.model.actuator(0).name == "FR_hip"
+    tau = np.zeros(12)
+    tau[JOINT_NAMES.index("FR_calf_joint")] = 5.0
+    sim.step(tau)
+    assert sim.data.ctrl[2] == 5.0  # SDK index 2 is FR_calf
+    assert np.count_nonzero(sim.data.ctrl) == 1
+
+
+def test_stands_five_seconds_under_joint_pd(description):
+    sim = Go2Simulator()
+    controller = JointPdController(description.pose("standing"))
+    z0 = sim.state()[0][2]
+    heights = []
+    for _ in range(5000):
+        q, v = sim.state()
+        sim.step(controller.compute(q, v))
+        heights.append(sim.state()[0][2])
+    assert max(abs(np.array(heights[500:]) - z0)) < 0.01
+    forces = sim.foot_contact_forces()
+    total = sum(f[2] for f in forces.values())
+    assert total == pytest.approx(description.total_mass * 9.81, rel=0.02)
+    assert min(f[2] for f in forces.values()) > 20.0
+
+
+def test_push_moves_the_base_only_while_applied(description):
+    sim = Go2Simulator()
+    controller = JointPdController(description.pose("standing"))
+    for _ in range(200):
+        sim.step(controller.compute(*sim.state()))
+    y0 = sim.state()[0][1]
+    sim.apply_force([0.0, 40.0, 0.0], 0.1)
+    base = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "base")
+    applied = []
+    for _ in range(150):
+        sim.step(controller.compute(*sim.state()))
+        applied.append(sim.data.xfrc_applied[base, 1])
+    assert applied[:100] == [40.0] * 100
+    assert applied[100:] == [0.0] * 50
+    assert sim.state()[0][1] - y0 > 1e-3
+
+
+def test_bad_input(sim):
+    with pytest.raises(ConfigurationError, match=r"tau: expected an array of shape \(12,\), received shape \(3,\)"):
+        sim.step(np.zeros(3))
+    with pytest.raises(UnknownNameError, match="unknown body 'torso'; valid bodys: base"):
+        sim.apply_force([1, 0, 0], 0.1, body="torso")
+    with pytest.raises(UnknownNameError, match="unknown pose 'crouch'"):
+        sim.reset("crouch")
+    with pytest.raises(ConfigurationError, match="actuator_order: expected each of the 12"):
+        Go2Simulator(actuator_order=JOINT_NAMES[:11] + ("FL_hip_joint",))

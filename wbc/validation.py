@@ -1,0 +1,73 @@
+"""Input checks shared by the library: shapes, finiteness and ranges, with messages that name the field."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
+
+
+def as_vector(name: str, value: Any, size: int, *, finite: bool = True) -> np.ndarray:
+    """Return ``value`` as a float64 vector of length ``size``.
+
+    Args:
+        name: Field name used in the error message.
+        value: Anything NumPy can turn into an array.
+        size: Expected length.
+        finite: Also reject NaN and infinite entries.
+
+    Raises:
+        ConfigurationError: Wrong shape or not numeric.
+        NonFiniteError: A NaN or infinite entry when ``finite`` is set.
+    """
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ConfigurationError(
+            f"{name}: expected {size} numbers, received {value!r}"
+        ) from err
+    if array.shape != (size,):
+        raise ConfigurationError(
+            f"{name}: expected an array of shape ({size},), received shape {array.shape}"
+        )
+    if finite and not np.all(np.isfinite(array)):
+        bad = np.flatnonzero(~np.isfinite(array)).tolist()
+        raise NonFiniteError(f"{name}: non-finite value at index {bad}: {array.tolist()}")
+    return array
+
+
+def as_float(name: str, value: Any, *, low: float | None = None, high: float | None = None,
+             low_inclusive: bool = True) -> float:
+    """Return ``value`` as a finite float inside ``[low, high]``.
+
+    Raises:
+        ConfigurationError: Not a number, or out of range (the message gives the range).
+        NonFiniteError: NaN or infinite.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ConfigurationError(f"{name}: expected a number, received {value!r}")
+    number = float(value)
+    if not np.isfinite(number):
+        raise NonFiniteError(f"{name}: expected a finite number, received {number}")
+    too_low = low is not None and (number < low if low_inclusive else number <= low)
+    if too_low or (high is not None and number > high):
+        lo = "-inf" if low is None else f"{low:g}"
+        hi = "inf" if high is None else f"{high:g}"
+        bracket = "[" if low_inclusive else "("
+        raise ConfigurationError(
+            f"{name}: expected a value in {bracket}{lo}, {hi}], received {number:g}"
+        )
+    return number
+
+
+def check_name(kind: str, name: str, valid: Iterable[str]) -> str:
+    """Return ``name`` if it is one of ``valid``, else raise listing every valid name."""
+    valid = list(valid)
+    if name not in valid:
+        raise UnknownNameError(
+            f"unknown {kind} {name!r}; valid {kind}s: {', '.join(valid)}"
+        )
+    return name
