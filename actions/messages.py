@@ -1,0 +1,448 @@
+"""Message types of the shipped actions: frozen dataclasses whose fields mirror the .action files.
+
+The ROS 2 analogues are the generated Python classes of ``builtin_interfaces``,
+``std_msgs``, ``geometry_msgs``, ``trajectory_msgs`` and ``control_msgs`` (e.g.
+``FollowJointTrajectory.Goal``). Like those, every message can be built with no arguments
+(numbers 0, strings and arrays empty). Unlike those, fields are checked when a message is
+built: a wrong type raises :class:`~wbc.errors.ConfigurationError` naming the field, the
+value received and what is valid. Numbers are normalised (``int`` -> ``float`` for float
+fields, NumPy scalars -> Python ones), array fields accept any sequence (a tuple, a NumPy
+array) and are stored as lists, and any field of type :class:`Duration` also accepts a
+number of seconds: ``JointTrajectoryPoint(positions=[0.1], time_from_start=3.0)``.
+
+Messages are frozen: fields cannot be reassigned (use :func:`dataclasses.replace`), so a goal
+cannot change under a running behaviour. The lists inside are plain lists; do not mutate a
+goal after sending it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import numbers
+import typing
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from wbc.errors import ConfigurationError
+
+_NANOSECONDS_PER_SECOND = 1_000_000_000
+
+
+class Message:
+    """Base class of every message: checks and normalises the fields after construction."""
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        for field_name, hint in _field_hints(type(self)).items():
+            value = _coerce(hint, getattr(self, field_name), f"{name}.{field_name}")
+            object.__setattr__(self, field_name, value)
+
+
+@functools.cache
+def _field_hints(cls: type) -> dict[str, Any]:
+    """The resolved type hint of every dataclass field of ``cls``, in field order."""
+    hints = typing.get_type_hints(cls)
+    return {f.name: hints[f.name] for f in dataclasses.fields(cls)}
+
+
+def _describe(value: Any) -> str:
+    return f"{value!r} (type {type(value).__name__})"
+
+
+def _coerce(hint: Any, value: Any, where: str) -> Any:
+    """Check ``value`` against the field type ``hint`` and return its normalised form."""
+    if typing.get_origin(hint) is list:
+        (item_hint,) = typing.get_args(hint)
+        if isinstance(value, str | bytes | dict) or not hasattr(value, "__iter__"):
+            raise ConfigurationError(
+                f"{where} must be a sequence (list, tuple or array); received {_describe(value)}"
+            )
+        return [_coerce(item_hint, item, f"{where}[{i}]") for i, item in enumerate(value)]
+    if hint is float:
+        if isinstance(value, numbers.Real) and not isinstance(value, bool):
+            return float(value)
+        raise ConfigurationError(f"{where} must be a real number; received {_describe(value)}")
+    if hint is int:
+        if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+            return int(value)
+        raise ConfigurationError(f"{where} must be an integer; received {_describe(value)}")
+    if hint is bool:
+        if isinstance(value, bool) or type(value).__name__ == "bool_":  # NumPy's bool
+            return bool(value)
+        raise ConfigurationError(f"{where} must be True or False; received {_describe(value)}")
+    if hint is str:
+        if isinstance(value, str):
+            return value
+        raise ConfigurationError(f"{where} must be a str; received {_describe(value)}")
+    if isinstance(hint, type) and issubclass(hint, _SecondsNanoseconds):
+        return hint.coerce(value, where)
+    if isinstance(hint, type) and isinstance(value, hint):
+        return value
+    raise ConfigurationError(
+        f"{where} must be a {getattr(hint, '__name__', hint)}; received {_describe(value)}"
+    )
+
+
+@dataclass(frozen=True, order=True)
+class _SecondsNanoseconds(Message):
+    """Shared arithmetic of :class:`Duration` and :class:`Time`: whole seconds + nanoseconds.
+
+    ``nanosec`` is always in ``[0, 1e9)``; a negative amount has a negative ``sec``
+    (-0.25 s is ``sec=-1, nanosec=750_000_000``), as in ``builtin_interfaces``.
+    """
+
+    sec: int = 0
+    nanosec: int = 0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not 0 <= self.nanosec < _NANOSECONDS_PER_SECOND:
+            raise ConfigurationError(
+                f"{type(self).__name__}.nanosec must be in [0, 999999999]; received "
+                f"{self.nanosec} (put whole seconds in sec, or use "
+                f"{type(self).__name__}.from_seconds)"
+            )
+
+    @classmethod
+    def from_seconds(cls, seconds: float) -> typing.Self:
+        """Build from a number of seconds, rounded to the nearest nanosecond.
+
+        Raises:
+            ConfigurationError: ``seconds`` is not a finite real number.
+        """
+        if (
+            not isinstance(seconds, numbers.Real)
+            or isinstance(seconds, bool)
+            or not math.isfinite(seconds)
+        ):
+            raise ConfigurationError(
+                f"{cls.__name__}.from_seconds needs a finite number of seconds; "
+                f"received {_describe(seconds)}"
+            )
+        sec, nanosec = divmod(
+            round(float(seconds) * _NANOSECONDS_PER_SECOND), _NANOSECONDS_PER_SECOND
+        )
+        return cls(sec=sec, nanosec=nanosec)
+
+    def to_seconds(self) -> float:
+        """The amount in seconds, e.g. ``Duration(sec=1, nanosec=500_000_000)`` -> 1.5."""
+        return self.sec + self.nanosec / _NANOSECONDS_PER_SECOND
+
+    @classmethod
+    def coerce(cls, value: Any, where: str) -> typing.Self:
+        """Return ``value`` if it already is a ``cls``, else ``cls.from_seconds(value)``.
+
+        Raises:
+            ConfigurationError: ``value`` is neither a ``cls`` nor a finite number of seconds.
+        """
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value):
+            return cls.from_seconds(value)
+        raise ConfigurationError(
+            f"{where} must be a {cls.__name__} or a finite number of seconds; "
+            f"received {_describe(value)}"
+        )
+
+
+@dataclass(frozen=True, order=True)
+class Duration(_SecondsNanoseconds):
+    """A signed span of time (``builtin_interfaces/Duration``): ``sec`` [s] + ``nanosec`` [ns].
+
+    ``Duration(sec=1)`` is 1.0 s; ``Duration.from_seconds(2.5)`` is ``sec=2, nanosec=5e8``.
+    """
+
+
+@dataclass(frozen=True, order=True)
+class Time(_SecondsNanoseconds):
+    """A point in (simulated) time (``builtin_interfaces/Time``), never negative."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.sec < 0:
+            raise ConfigurationError(
+                f"Time must not be negative; received sec={self.sec}, nanosec={self.nanosec}"
+            )
+
+
+def as_duration(value: Duration | float, name: str = "duration") -> Duration:
+    """Accept a :class:`Duration` or a number of seconds where a duration is expected.
+
+    Args:
+        value: A ``Duration``, or seconds as an ``int``/``float`` (e.g. ``3.0``).
+        name: The argument's name, used in the error message.
+
+    Returns:
+        ``value`` itself if it is a ``Duration``, else ``Duration.from_seconds(value)``.
+
+    Raises:
+        ConfigurationError: ``value`` is neither a ``Duration`` nor a finite number.
+    """
+    return Duration.coerce(value, name)
+
+
+# --- std_msgs, geometry_msgs ---------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Header(Message):
+    """``std_msgs/Header``: when (``stamp``, simulated time) and in which frame data was given."""
+
+    stamp: Time = field(default_factory=Time)
+    frame_id: str = ""
+
+
+@dataclass(frozen=True)
+class Vector3(Message):
+    """``geometry_msgs/Vector3``."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+
+@dataclass(frozen=True)
+class Quaternion(Message):
+    """``geometry_msgs/Quaternion``, ``(x, y, z, w)``; the default is the identity."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    w: float = 1.0
+
+
+@dataclass(frozen=True)
+class Transform(Message):
+    """``geometry_msgs/Transform``: translation [m] and rotation."""
+
+    translation: Vector3 = field(default_factory=Vector3)
+    rotation: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass(frozen=True)
+class Twist(Message):
+    """``geometry_msgs/Twist``: linear [m/s] and angular [rad/s] velocity."""
+
+    linear: Vector3 = field(default_factory=Vector3)
+    angular: Vector3 = field(default_factory=Vector3)
+
+
+# --- trajectory_msgs -----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class JointTrajectoryPoint(Message):
+    """``trajectory_msgs/JointTrajectoryPoint``: one waypoint, values in ``joint_names`` order.
+
+    Attributes:
+        positions: Joint positions [rad].
+        velocities: Joint velocities [rad/s]; empty if unspecified.
+        accelerations: Joint accelerations [rad/s^2]; empty if unspecified.
+        effort: Joint torques [N m]; empty if unspecified.
+        time_from_start: When to reach the point, from the trajectory start (a Duration or
+            seconds).
+    """
+
+    positions: list[float] = field(default_factory=list)
+    velocities: list[float] = field(default_factory=list)
+    accelerations: list[float] = field(default_factory=list)
+    effort: list[float] = field(default_factory=list)
+    time_from_start: Duration = field(default_factory=Duration)
+
+
+@dataclass(frozen=True)
+class JointTrajectory(Message):
+    """``trajectory_msgs/JointTrajectory``: named joints and the waypoints they follow."""
+
+    header: Header = field(default_factory=Header)
+    joint_names: list[str] = field(default_factory=list)
+    points: list[JointTrajectoryPoint] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class MultiDOFJointTrajectoryPoint(Message):
+    """``trajectory_msgs/MultiDOFJointTrajectoryPoint``: one waypoint of multi-DOF joints."""
+
+    transforms: list[Transform] = field(default_factory=list)
+    velocities: list[Twist] = field(default_factory=list)
+    accelerations: list[Twist] = field(default_factory=list)
+    time_from_start: Duration = field(default_factory=Duration)
+
+
+@dataclass(frozen=True)
+class MultiDOFJointTrajectory(Message):
+    """``trajectory_msgs/MultiDOFJointTrajectory``; leave it empty unless a server supports it."""
+
+    header: Header = field(default_factory=Header)
+    joint_names: list[str] = field(default_factory=list)
+    points: list[MultiDOFJointTrajectoryPoint] = field(default_factory=list)
+
+
+# --- control_msgs --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class JointTolerance(Message):
+    """``control_msgs/JointTolerance``: 0 means "server default", -1 means "no limit".
+
+    Attributes:
+        name: Joint name.
+        position: Position tolerance [rad].
+        velocity: Velocity tolerance [rad/s].
+        acceleration: Acceleration tolerance [rad/s^2].
+    """
+
+    name: str = ""
+    position: float = 0.0
+    velocity: float = 0.0
+    acceleration: float = 0.0
+
+
+@dataclass(frozen=True)
+class JointComponentTolerance(Message):
+    """``control_msgs/JointComponentTolerance``: a tolerance on one component of a multi-DOF joint."""
+
+    X_AXIS: ClassVar[int] = 1
+    Y_AXIS: ClassVar[int] = 2
+    Z_AXIS: ClassVar[int] = 3
+    TRANSLATION: ClassVar[int] = 4
+    ROTATION: ClassVar[int] = 5
+
+    joint_name: str = ""
+    component: int = 0
+    position: float = 0.0
+    velocity: float = 0.0
+    acceleration: float = 0.0
+
+
+@dataclass(frozen=True)
+class FollowJointTrajectoryGoal(Message):
+    """Goal of ``control_msgs/action/FollowJointTrajectory``.
+
+    Attributes:
+        trajectory: The joint trajectory to follow.
+        multi_dof_trajectory: Multi-DOF part; a server without multi-DOF support rejects a
+            non-empty one.
+        path_tolerance: Per-joint tolerances checked during execution.
+        component_path_tolerance: Per-component tolerances of multi-DOF joints (path).
+        goal_tolerance: Per-joint tolerances checked at the end.
+        component_goal_tolerance: Per-component tolerances of multi-DOF joints (goal).
+        goal_time_tolerance: How long after the last point's time the goal tolerance may
+            still be reached (a Duration or seconds).
+    """
+
+    trajectory: JointTrajectory = field(default_factory=JointTrajectory)
+    multi_dof_trajectory: MultiDOFJointTrajectory = field(default_factory=MultiDOFJointTrajectory)
+    path_tolerance: list[JointTolerance] = field(default_factory=list)
+    component_path_tolerance: list[JointComponentTolerance] = field(default_factory=list)
+    goal_tolerance: list[JointTolerance] = field(default_factory=list)
+    component_goal_tolerance: list[JointComponentTolerance] = field(default_factory=list)
+    goal_time_tolerance: Duration = field(default_factory=Duration)
+
+
+@dataclass(frozen=True)
+class FollowJointTrajectoryResult(Message):
+    """Result of ``FollowJointTrajectory``: an error code (0 on success) and a readable reason."""
+
+    SUCCESSFUL: ClassVar[int] = 0
+    INVALID_GOAL: ClassVar[int] = -1
+    INVALID_JOINTS: ClassVar[int] = -2
+    OLD_HEADER_TIMESTAMP: ClassVar[int] = -3
+    PATH_TOLERANCE_VIOLATED: ClassVar[int] = -4
+    GOAL_TOLERANCE_VIOLATED: ClassVar[int] = -5
+
+    error_code: int = 0
+    error_string: str = ""
+
+
+@dataclass(frozen=True)
+class FollowJointTrajectoryFeedback(Message):
+    """Feedback of ``FollowJointTrajectory``: desired, actual and error points per joint."""
+
+    header: Header = field(default_factory=Header)
+    joint_names: list[str] = field(default_factory=list)
+    desired: JointTrajectoryPoint = field(default_factory=JointTrajectoryPoint)
+    actual: JointTrajectoryPoint = field(default_factory=JointTrajectoryPoint)
+    error: JointTrajectoryPoint = field(default_factory=JointTrajectoryPoint)
+
+
+# --- this library's behaviours ---------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BehaviourResult(Message):
+    """Result shared by HighFive, Stand and Sit: did it work, and a readable account."""
+
+    success: bool = False
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class PhaseFeedback(Message):
+    """Feedback shared by HighFive, Stand and Sit.
+
+    Attributes:
+        phase: Name of the current phase (e.g. ``"raising"``).
+        progress: 0.0 -> 1.0, never decreasing within one goal.
+    """
+
+    phase: str = ""
+    progress: float = 0.0
+
+
+@dataclass(frozen=True)
+class PoseGoal(Message):
+    """Goal shared by Stand and Sit: move to a pose.
+
+    Attributes:
+        duration_s: Time to reach the pose [s].
+    """
+
+    duration_s: float = 2.0
+
+
+@dataclass(frozen=True)
+class HighFiveGoal(Message):
+    """Goal of HighFive: raise the front-right foot, hold it up, put it back down.
+
+    Attributes:
+        target_height: How high to raise the front leg [m].
+        hold_seconds: How long to hold the raised position [s].
+    """
+
+    target_height: float = 0.0
+    hold_seconds: int = 0
+
+
+class HighFiveResult(BehaviourResult):
+    """Result of HighFive."""
+
+
+class HighFiveFeedback(PhaseFeedback):
+    """Feedback of HighFive; phases e.g. standing, shifting, raising, ready, lowering, complete."""
+
+
+class StandGoal(PoseGoal):
+    """Goal of Stand: rise to the nominal standing pose in ``duration_s`` [s]."""
+
+
+class StandResult(BehaviourResult):
+    """Result of Stand."""
+
+
+class StandFeedback(PhaseFeedback):
+    """Feedback of Stand."""
+
+
+class SitGoal(PoseGoal):
+    """Goal of Sit: lower the body to the resting pose in ``duration_s`` [s]."""
+
+
+class SitResult(BehaviourResult):
+    """Result of Sit."""
+
+
+class SitFeedback(PhaseFeedback):
+    """Feedback of Sit."""
