@@ -9,7 +9,8 @@ from wbc.errors import WbcError
 if TYPE_CHECKING:
     from concurrent.futures import Future
 
-    from actions.client_goal_handle import ClientGoalHandle, Rejection
+    from actions.client_goal_handle import ClientGoalHandle
+    from actions.responses import Rejection
 
 
 class IllegalTransitionError(WbcError):
@@ -21,14 +22,21 @@ class ActionUsageError(WbcError, RuntimeError):
 
 
 class GoalRejectedError(WbcError):
-    """A goal was rejected; :attr:`rejection` holds the code and message.
+    """A goal was rejected, so it has no result.
 
     Attributes:
-        rejection: Why the server refused the goal.
+        goal_id: The rejected goal.
+        action_name: The action it was sent to.
+        rejection: Why the server refused it (code and message).
     """
 
-    def __init__(self, message: str, rejection: Rejection) -> None:
-        super().__init__(message)
+    def __init__(self, goal_id: str, action_name: str, rejection: Rejection) -> None:
+        super().__init__(
+            f"goal {goal_id} ({action_name}) was rejected (code {rejection.code}): "
+            f"{rejection.message}"
+        )
+        self.goal_id = goal_id
+        self.action_name = action_name
         self.rejection = rejection
 
 

@@ -1,0 +1,236 @@
+"""Sends goals to one action of a runner and waits for them (ROS 2: ``rclpy.action.ActionClient``).
+
+Names follow rclpy: ``send_goal_async`` returns a future of a :class:`ClientGoalHandle`, whose
+``get_result_async`` and ``cancel_goal_async`` return futures too. ``send_goal_and_wait`` is
+the blocking shortcut, usable with or without a thread that ticks the runner.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import time
+from collections.abc import Callable
+from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeoutError
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from actions.errors import (
+    ActionTimeoutError,
+    ActionUsageError,
+    GoalRejectedError,
+    RunnerStalledError,
+)
+from wbc.errors import ConfigurationError
+
+if TYPE_CHECKING:
+    from actions.action_runner import ActionRunner
+    from actions.action_type import ActionType
+    from actions.client_goal_handle import ClientGoalHandle
+    from actions.responses import CancelResponse, FeedbackMessage, WrappedResult
+
+T = TypeVar("T")
+
+
+class ActionClient:
+    """Client of one named action on a runner. Every method may be called from any thread.
+
+    Args:
+        runner: The runner serving the action.
+        action_name: The server's name, e.g. ``"high_five"``.
+
+    Raises:
+        UnknownNameError: The runner has no server of that name; lists the served names.
+    """
+
+    def __init__(self, runner: ActionRunner, action_name: str) -> None:
+        self._runner = runner
+        self._server = runner.server(action_name)
+
+    @property
+    def action_name(self) -> str:
+        """The action this client talks to."""
+        return self._server.action_name
+
+    @property
+    def action_type(self) -> ActionType:
+        """The action's interface (``.Goal`` builds a goal)."""
+        return self._server.action_type
+
+    def send_goal_async(
+        self,
+        goal: Any,
+        feedback_callback: Callable[[FeedbackMessage], None] | None = None,
+    ) -> Future[ClientGoalHandle]:
+        """Send a goal; the future resolves on the tick that accepts or rejects it.
+
+        Args:
+            goal: A message of the action's goal type.
+            feedback_callback: Called on the ticking thread with a :class:`FeedbackMessage`
+                for every feedback the goal publishes, in order, after the tick's state
+                change. Exceptions are logged and ignored.
+
+        Raises:
+            ConfigurationError: ``goal`` has the wrong type.
+        """
+        return self._runner.submit_goal(self._server, goal, feedback_callback)
+
+    def cancel(self, goal_handle: ClientGoalHandle) -> Future[CancelResponse]:
+        """Ask to cancel a goal; same as ``goal_handle.cancel_goal_async()``."""
+        return goal_handle.cancel_goal_async()
+
+    def send_goal_and_wait(
+        self,
+        goal: Any,
+        timeout: float | None = None,
+        feedback_callback: Callable[[FeedbackMessage], None] | None = None,
+        *,
+        stall_timeout_s: float = 2.0,
+    ) -> WrappedResult:
+        """Send a goal and block until it ends.
+
+        How it makes progress:
+
+        * If this thread registered a spin hook (``runner.set_spinner(loop.spin_once)``), it
+          calls ``spin_once()`` itself until the goal ends (as
+          ``rclpy.spin_until_future_complete`` does); ``timeout`` is in **simulated**
+          seconds, measured on :attr:`ActionRunner.now_s`.
+        * Otherwise another thread must be ticking the runner; ``timeout`` is in
+          **wall-clock** seconds.
+
+        Args:
+            goal: A message of the action's goal type.
+            timeout: Longest wait [s], ``None`` for no limit.
+            feedback_callback: As in :meth:`send_goal_async`.
+            stall_timeout_s: Without a spin hook: give up after this many wall-clock seconds
+                [s] without a single tick.
+
+        Returns:
+            The goal's terminal status and result.
+
+        Raises:
+            GoalRejectedError: The goal was rejected (code and message attached).
+            ActionTimeoutError: ``timeout`` expired. The goal is NOT cancelled: it keeps
+                running; cancel it with ``client.cancel(err.goal_handle)``.
+            RunnerStalledError: Nothing ticks the runner (no tick for ``stall_timeout_s``
+                and no spin hook on this thread), or the spin hook does not tick it.
+            ActionUsageError: Called on the ticking thread (from a callback): it would wait
+                for a tick that cannot happen.
+            ConfigurationError: ``goal``, ``timeout`` or ``stall_timeout_s`` is invalid.
+        """
+        if self._runner.in_tick_thread():
+            raise ActionUsageError(
+                "send_goal_and_wait was called from inside a tick callback, where it would "
+                "wait forever for the next tick; use send_goal_async with a done callback"
+            )
+        _check_seconds("timeout", timeout, allow_none=True)
+        _check_seconds("stall_timeout_s", stall_timeout_s, allow_none=False)
+        waiter = _Waiter(self._runner, timeout, stall_timeout_s)
+        handle_future = self.send_goal_async(goal, feedback_callback)
+        handle = waiter.wait(
+            handle_future,
+            lambda: ActionTimeoutError(
+                f"the goal request to '{self.action_name}' was not processed within "
+                f"{timeout:g} s of {waiter.clock} time; it is still queued and may be "
+                "accepted by a later tick (it has NOT been withdrawn): use "
+                "err.goal_handle_future to cancel it once accepted",
+                goal_handle_future=handle_future,
+            ),
+            f"the goal request to '{self.action_name}'",
+        )
+        if not handle.accepted:
+            raise GoalRejectedError(handle.goal_id, handle.action_name, handle.rejection)
+        return waiter.wait(
+            handle.get_result_async(),
+            lambda: ActionTimeoutError(
+                f"goal {handle.goal_id} ({self.action_name}) did not finish within "
+                f"{timeout:g} s of {waiter.clock} time; it is still {handle.status.name} "
+                "and has NOT been cancelled: cancel it with client.cancel(err.goal_handle)",
+                goal_handle=handle,
+                goal_handle_future=handle_future,
+            ),
+            f"goal {handle.goal_id} ({self.action_name})",
+        )
+
+
+class _Waiter:
+    """Waits for futures of one blocking call, spinning or blocking, against one deadline."""
+
+    def __init__(self, runner: ActionRunner, timeout: float | None, stall_timeout_s: float):
+        self._runner = runner
+        self._timeout = timeout
+        self._stall_timeout_s = stall_timeout_s
+        self._spinner = runner.spinner_for_current_thread()
+        self._start_sim_s = runner.now_s
+        self._start_wall_s = time.monotonic()
+
+    @property
+    def clock(self) -> str:
+        """Which clock ``timeout`` is measured on."""
+        return "simulated" if self._spinner is not None else "wall-clock"
+
+    def wait(self, future: Future[T], on_timeout: Callable[[], ActionTimeoutError], what: str) -> T:
+        if self._spinner is not None:
+            return self._spin(future, on_timeout, self._spinner)
+        return self._block(future, on_timeout, what)
+
+    def _spin(
+        self,
+        future: Future[T],
+        on_timeout: Callable[[], ActionTimeoutError],
+        spinner: Callable[[], None],
+    ) -> T:
+        while not future.done():
+            now_s = self._runner.now_s
+            if self._start_sim_s is None:
+                self._start_sim_s = now_s
+            if (
+                self._timeout is not None
+                and now_s is not None
+                and now_s - self._start_sim_s >= self._timeout
+            ):
+                raise on_timeout()
+            ticks = self._runner.tick_count
+            spinner()
+            if self._runner.tick_count == ticks:
+                raise RunnerStalledError(
+                    f"the spin hook {spinner!r} returned without ticking the runner; "
+                    "spin_once must advance the control loop and call runner.tick(now_s)"
+                )
+        return future.result()
+
+    def _block(
+        self, future: Future[T], on_timeout: Callable[[], ActionTimeoutError], what: str
+    ) -> T:
+        while True:
+            window = self._stall_timeout_s
+            if self._timeout is not None:
+                remaining = self._start_wall_s + self._timeout - time.monotonic()
+                if remaining <= 0:
+                    raise on_timeout()
+                window = min(window, remaining)
+            ticks = self._runner.tick_count
+            try:
+                return future.result(timeout=window)
+            except FutureTimeoutError:
+                if window >= self._stall_timeout_s and self._runner.tick_count == ticks:
+                    raise RunnerStalledError(
+                        f"nothing is ticking the runner: no tick in {window:g} s (wall-clock) "
+                        f"while waiting for {what}, and this thread registered no spin hook. "
+                        "Call runner.tick(now_s) from a control loop thread, or register the "
+                        "loop's spin_once with runner.set_spinner(...) on this thread",
+                        goal_handle_future=None,
+                    ) from None
+
+
+def _check_seconds(name: str, value: Any, *, allow_none: bool) -> None:
+    if value is None and allow_none:
+        return
+    if (
+        not isinstance(value, numbers.Real)
+        or isinstance(value, bool)
+        or not math.isfinite(value)
+        or value <= 0
+    ):
+        valid = "None or a finite number of seconds > 0" if allow_none else "a finite number > 0"
+        raise ConfigurationError(f"{name} must be {valid}; received {value!r}")

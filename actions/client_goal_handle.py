@@ -1,0 +1,83 @@
+"""A client's handle on one goal it sent (ROS 2: ``rclpy.action.client.ClientGoalHandle``)."""
+
+from __future__ import annotations
+
+from concurrent.futures import Future
+from typing import TYPE_CHECKING, Any
+
+from actions.errors import GoalRejectedError
+from actions.goal_status import GoalStatus
+
+if TYPE_CHECKING:
+    from actions.action_runner import ActionRunner
+    from actions.goal_record import GoalRecord
+    from actions.responses import CancelResponse, Rejection, WrappedResult
+
+
+class ClientGoalHandle:
+    """The client's view of a goal: id, acceptance, live status, result and cancellation.
+
+    Obtained from the future returned by ``ActionClient.send_goal_async``. Thread-safe. The
+    goal's result is stored on the handle (in the future of :meth:`get_result_async`), so it
+    stays available for as long as the handle is held, however many goals follow.
+    """
+
+    def __init__(self, runner: ActionRunner, record: GoalRecord) -> None:
+        self._runner = runner
+        self._record = record
+
+    @property
+    def goal_id(self) -> str:
+        """The goal's id, unique per runner, assigned in submission order (``"1"``, ...)."""
+        return self._record.goal_id
+
+    @property
+    def action_name(self) -> str:
+        """The action the goal was sent to."""
+        return self._record.server.action_name
+
+    @property
+    def goal(self) -> Any:
+        """The goal message that was sent."""
+        return self._record.goal
+
+    @property
+    def accepted(self) -> bool:
+        """Whether the server accepted the goal."""
+        return self._record.rejection is None and self._record.status != GoalStatus.UNKNOWN
+
+    @property
+    def rejection(self) -> Rejection | None:
+        """Code and message of the rejection, or ``None`` if accepted."""
+        return self._record.rejection
+
+    @property
+    def status(self) -> GoalStatus:
+        """The latest status (``UNKNOWN`` for a rejected goal)."""
+        return self._record.status
+
+    def get_result_async(self) -> Future[WrappedResult]:
+        """A future resolved with status and result on the tick the goal ends.
+
+        Every call returns the same future; once done it keeps the result.
+
+        Raises:
+            GoalRejectedError: The goal was rejected, so it has no result.
+        """
+        if self._record.rejection is not None:
+            raise GoalRejectedError(self.goal_id, self.action_name, self._record.rejection)
+        return self._record.result_future
+
+    def cancel_goal_async(self) -> Future[CancelResponse]:
+        """Ask to cancel the goal; the future resolves on the next tick.
+
+        An accepted request moves the goal to CANCELING on that tick (before the reply);
+        the goal's result future then resolves when its unwind is over.
+        """
+        return self._runner.submit_cancel(self._record)
+
+    def __repr__(self) -> str:
+        return (
+            f"ClientGoalHandle(goal_id={self.goal_id!r}, action_name={self.action_name!r}, "
+            f"status={self.status.name})"
+        )
