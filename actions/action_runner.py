@@ -529,7 +529,7 @@ class ActionRunner:
             )
             message = (
                 f"behaviour.step reported {step.status.name} while the goal was "
-                f"{record.status.name}; a {record.status.name} goal can only end {legal}"
+                f"{record.status.name}; a goal that is {record.status.name} can only end {legal}"
             )
         elif step.status is not None and not isinstance(step.result, action_type.result_type):
             message = (
