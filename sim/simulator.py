@@ -163,6 +163,24 @@ class Go2Simulator:
             forces[leg] += world if contact.geom2 == other else -world
         return forces
 
+    def foot_sliding_velocities(self) -> dict[str, np.ndarray]:
+        """Horizontal velocity [m/s] of each foot sphere's material point at its bottom.
+
+        This is the sliding velocity of a foot on the floor: zero when the sphere rolls
+        without slipping, even though its centre then moves.
+        """
+        velocity = np.zeros(6)
+        out = {}
+        for leg, frame in FOOT_FRAMES.items():
+            body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, frame)
+            mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_BODY, body,
+                                     velocity, 0)
+            angular, linear = velocity[:3], velocity[3:]
+            # Point d = (0, 0, -r) below the centre: v + omega x d.
+            r = self.model.geom_size[self._foot_geom[leg], 0]
+            out[leg] = np.array([linear[0] - r * angular[1], linear[1] + r * angular[0]])
+        return out
+
     def foot_positions(self) -> dict[str, np.ndarray]:
         """World position [m] of each foot frame (the foot sphere's centre)."""
         return {

@@ -1,0 +1,44 @@
+"""Floating-base orientation task."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from tasks.task import Task
+from wbc.errors import ConfigurationError
+from wbc.validation import as_vector
+
+
+class BaseOrientationTask(Task):
+    """Track a world-frame orientation of the floating base.
+
+    Errors and rates are in the base frame, where the free-flyer velocity's angular part
+    is ``v[3:6]``: the Jacobian is a selection and the drift is zero.
+    """
+
+    dim = 3
+
+    def __init__(self, *, kp: float = 100.0, kd: float | None = None, weight: float = 5.0):
+        super().__init__(kp=kp, kd=kd, weight=weight)
+        self.target = np.eye(3)
+        self.jacobian[:, 3:6] = np.eye(3)
+
+    def set_target(self, rotation: np.ndarray) -> None:
+        """Set the target rotation ``R_world_base`` (3x3, orthonormal); copies it."""
+        rotation = np.asarray(rotation, dtype=float)
+        flat = as_vector("BaseOrientationTask.target", rotation.reshape(-1), 9).reshape(3, 3)
+        if not np.allclose(flat @ flat.T, np.eye(3), atol=1e-6) or np.linalg.det(flat) < 0:
+            raise ConfigurationError(
+                "BaseOrientationTask.target: expected a rotation matrix (orthonormal, det +1)"
+            )
+        self.target = flat.copy()
+
+    def set_rpy(self, roll: float, pitch: float, yaw: float) -> None:
+        """Set the target from roll, pitch, yaw [rad] (extrinsic X, Y, Z)."""
+        self.set_target(pin.rpy.rpyToMatrix(float(roll), float(pitch), float(yaw)))
+
+    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
+        rotation = data.oMi[1].rotation
+        self.error[:] = pin.log3(rotation.T @ self.target)
+        np.negative(data.v[1].angular, out=self.error_rate)

@@ -1,0 +1,67 @@
+"""Stance-contact condition: feet on the ground do not accelerate."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from tasks.task import Task
+from wbc.errors import ConfigurationError
+
+
+class ContactTask(Task):
+    """``J qdd + drift = -kd * contact velocity`` for one or more rolling point contacts.
+
+    Each foot is a sphere of radius ``radius_m`` centred on its frame, touching flat ground
+    at the point ``d = (0, 0, -radius_m)`` (world) below its centre. Rolling without
+    slipping keeps that point still: ``v_c + omega x d = 0``, so the rows are
+    ``J = J_lin - [d]x J_ang`` and, ``d`` being constant in the world while the sphere
+    rolls, ``drift = a_lin - [d]x alpha`` (classical accelerations at ``qdd = 0``). The
+    same ``J`` maps the contact forces, applied at the contact point, to joint torques.
+    With ``radius_m = 0`` this is the plain point contact at the frame origin.
+
+    The rows of foot ``i`` are ``3 i .. 3 i + 2`` (world x, y, z). The controller uses them
+    as equality constraints, not as a cost; computing all feet in one task shares the work
+    with the contact forces' Jacobians. ``kp`` is zero (a stance foot has no position
+    target); ``kd`` damps any residual sliding. ``error_rate`` is minus the contact points'
+    velocities [m/s].
+    """
+
+    def __init__(self, model: pin.Model, frames: Sequence[str], *, kd: float = 0.0,
+                 radius_m: float = 0.0):
+        """Args:
+            model: The Pinocchio model holding the frames.
+            frames: Foot frame names, e.g. ``["FL_foot", "FR_foot", "RL_foot", "RR_foot"]``.
+            kd: Damping of the contact points' velocity [1/s].
+            radius_m: Radius of the foot spheres [m].
+        """
+        frames = list(frames)
+        for frame in frames:
+            if not model.existFrame(frame):
+                names = [f.name for f in model.frames]
+                raise ConfigurationError(f"frames: unknown frame {frame!r}; valid frames: {names}")
+        self.frames = frames
+        self.frame_ids = [model.getFrameId(f) for f in frames]
+        self.dim = 3 * len(frames)
+        self.radius_m = float(radius_m)
+        super().__init__(kp=0.0, kd=kd, weight=1.0, nv=model.nv)
+
+    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
+        jac, drift, r = self.jacobian, self.drift, self.radius_m
+        world = pin.LOCAL_WORLD_ALIGNED
+        for i, fid in enumerate(self.frame_ids):
+            rows = slice(3 * i, 3 * i + 3)
+            frame_jac = pin.getFrameJacobian(model, data, fid, world)
+            acc = pin.getFrameClassicalAcceleration(model, data, fid, world).vector
+            jac[rows] = frame_jac[:3]
+            drift[rows] = acc[:3]
+            if r:
+                # -[d]x with d = (0, 0, -r): x row += -r * angular y, y row += r * angular x.
+                jac[3 * i] -= r * frame_jac[4]
+                jac[3 * i + 1] += r * frame_jac[3]
+                drift[3 * i] -= r * acc[4]
+                drift[3 * i + 1] += r * acc[3]
+        np.matmul(jac, v, out=self.error_rate)
+        np.negative(self.error_rate, out=self.error_rate)

@@ -1,0 +1,63 @@
+"""Position task on a frame (a foot, the base), on all axes or a subset."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from tasks.task import Task
+from wbc.errors import ConfigurationError
+from wbc.validation import as_vector
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+class FramePositionTask(Task):
+    """Track the world position [m] of a frame's origin on the chosen axes.
+
+    Uses the ``LOCAL_WORLD_ALIGNED`` Jacobian and the classical (not spatial) acceleration
+    as drift, so ``J qdd + drift`` is the second derivative of the world position.
+    """
+
+    def __init__(self, model: pin.Model, frame: str, *, axes: str = "xyz", kp: float = 400.0,
+                 kd: float | None = None, weight: float = 10.0):
+        """Args:
+            model: The Pinocchio model holding ``frame``.
+            frame: Frame name, e.g. ``"FR_foot"``.
+            axes: World axes to track, a subset of ``"xyz"`` (``"z"`` for a height task).
+            kp: Stiffness [1/s^2]; kd: damping [1/s] (critical when ``None``).
+            weight: Cost weight.
+        """
+        if not model.existFrame(frame):
+            names = [f.name for f in model.frames]
+            raise ConfigurationError(f"frame: unknown frame {frame!r}; valid frames: {names}")
+        if not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
+            raise ConfigurationError(f"axes: expected a subset of 'xyz', received {axes!r}")
+        self.frame = frame
+        self.frame_id = model.getFrameId(frame)
+        self.axes = axes
+        self._rows = [_AXES[a] for a in axes]
+        self.dim = len(axes)
+        super().__init__(kp=kp, kd=kd, weight=weight, nv=model.nv)
+        self.target: np.ndarray | None = None
+        self.target_velocity = np.zeros(self.dim)
+
+    def set_target(self, position: np.ndarray, velocity: np.ndarray | None = None) -> None:
+        """Set the target position [m] and velocity [m/s] on the task's axes; copies them."""
+        position = as_vector(f"{self.frame}.target", position, self.dim)
+        velocity = np.zeros(self.dim) if velocity is None else as_vector(
+            f"{self.frame}.target_velocity", velocity, self.dim)
+        self.target, self.target_velocity = position, velocity
+
+    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
+        target = self._require_target(self.target)
+        rows = self._rows
+        jac = pin.getFrameJacobian(model, data, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
+        self.jacobian[:] = jac[rows]
+        position = data.oMf[self.frame_id].translation
+        np.subtract(target, position[rows], out=self.error)
+        velocity = pin.getFrameVelocity(model, data, self.frame_id, pin.LOCAL_WORLD_ALIGNED).linear
+        np.subtract(self.target_velocity, velocity[rows], out=self.error_rate)
+        acc = pin.getFrameClassicalAcceleration(model, data, self.frame_id,
+                                                pin.LOCAL_WORLD_ALIGNED).linear
+        self.drift[:] = acc[rows]

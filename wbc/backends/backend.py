@@ -1,0 +1,72 @@
+"""The small interface every QP backend implements, and the registry that names them."""
+
+from __future__ import annotations
+
+import abc
+from collections.abc import Callable
+
+from wbc.backends.qp_problem import QpProblem, QpResult
+from wbc.errors import UnknownNameError
+
+
+class QpBackend(abc.ABC):
+    """Solves :class:`QpProblem` instances of fixed dimensions, tick after tick.
+
+    ``setup`` is called once (and again only if the dimensions change); ``solve`` reads the
+    problem's arrays, which the controller has updated in place, and returns a
+    :class:`QpResult`. A backend never raises on a failed solve: it returns ``found=False``
+    with a reason.
+    """
+
+    #: Registry name.
+    name: str = ""
+
+    @abc.abstractmethod
+    def setup(self, problem: QpProblem) -> None:
+        """Allocate the solver workspace for problems shaped like ``problem``."""
+
+    @abc.abstractmethod
+    def solve(self, problem: QpProblem) -> QpResult:
+        """Solve the current ``problem``."""
+
+
+_REGISTRY: dict[str, Callable[[], QpBackend]] = {}
+_MISSING: dict[str, str] = {}
+
+
+def register_backend(name: str, factory: Callable[[], QpBackend]) -> None:
+    """Make a backend available under ``name``."""
+    _REGISTRY[name] = factory
+
+
+def register_missing(name: str, reason: str) -> None:
+    """Record why a backend is not available (shown when someone asks for it)."""
+    _MISSING[name] = reason
+
+
+def available_backends() -> list[str]:
+    """Names of the backends installed on this machine."""
+    _load_all()
+    return sorted(_REGISTRY)
+
+
+def missing_backends() -> dict[str, str]:
+    """Backends this library knows of but cannot use here, with the reason."""
+    _load_all()
+    return dict(_MISSING)
+
+
+def make_backend(name: str) -> QpBackend:
+    """A new backend instance by name; an unknown name lists the installed ones."""
+    _load_all()
+    if name not in _REGISTRY:
+        hint = f" ({_MISSING[name]})" if name in _MISSING else ""
+        raise UnknownNameError(
+            f"unknown backend {name!r}{hint}; installed backends: {', '.join(sorted(_REGISTRY))}"
+        )
+    return _REGISTRY[name]()
+
+
+def _load_all() -> None:
+    # Imported here so that a missing solver only removes its own backend.
+    from wbc.backends import daqp_backend, osqp_backend, qpsolvers_backend  # noqa: F401

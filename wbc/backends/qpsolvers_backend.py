@@ -1,0 +1,78 @@
+"""Any solver qpsolvers has installed, through its one-shot ``solve_problem`` call."""
+
+from __future__ import annotations
+
+import time
+from functools import partial
+
+import numpy as np
+
+from wbc.backends.backend import QpBackend, register_backend, register_missing
+from wbc.backends.qp_problem import INFINITY, QpProblem, QpResult
+
+try:
+    import qpsolvers
+except ImportError as err:  # pragma: no cover - depends on the machine
+    qpsolvers = None
+    register_missing("qpsolvers", f"package 'qpsolvers' not importable: {err}")
+
+#: Solvers whose one-shot call this library registers (when qpsolvers sees them).
+SOLVERS = ("clarabel", "cvxopt", "daqp", "ecos", "highs", "osqp", "piqp", "proxqp", "qpalm",
+           "quadprog", "scs")
+#: Tight tolerances where qpsolvers passes them on, so solutions are comparable.
+_SETTINGS = {
+    "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "polishing": True, "max_iter": 20000},
+    "proxqp": {"eps_abs": 1e-9},
+    "piqp": {"eps_abs": 1e-9, "eps_rel": 1e-9},
+    "clarabel": {"tol_feas": 1e-9, "tol_gap_abs": 1e-9},
+}
+
+
+class QpsolversBackend(QpBackend):
+    """A new problem per tick through ``qpsolvers.solve_problem`` (no persistent workspace).
+
+    Converts the two-sided rows to qpsolvers' ``G x <= h``, ``A x = b``: the reference a
+    newcomer would write first, and the baseline the persistent backends are timed against.
+    """
+
+    def __init__(self, solver: str):
+        self.solver = solver
+        self.name = f"qpsolvers:{solver}"
+
+    def setup(self, problem: QpProblem) -> None:
+        """Nothing to keep between ticks."""
+
+    def solve(self, problem: QpProblem) -> QpResult:
+        start = time.perf_counter()
+        eq = problem.is_equality
+        ineq = ~eq
+        has_up = ineq & (problem.upper < INFINITY)
+        has_low = ineq & (problem.lower > -INFINITY)
+        G = np.vstack([problem.A[has_up], -problem.A[has_low]])
+        h = np.concatenate([problem.upper[has_up], -problem.lower[has_low]])
+        lb = np.where(problem.lb <= -INFINITY, -np.inf, problem.lb)
+        ub = np.where(problem.ub >= INFINITY, np.inf, problem.ub)
+        qp = qpsolvers.Problem(problem.H, problem.f, G, h, problem.A[eq], problem.upper[eq],
+                               lb, ub)
+        try:
+            solution = qpsolvers.solve_problem(qp, solver=self.solver,
+                                               **_SETTINGS.get(self.solver, {}))
+            x, found = solution.x, bool(solution.found)
+            reason = "" if found else f"{self.solver}: no solution found"
+        except Exception as err:  # a solver's own error must not escape the control loop
+            x, found, reason = None, False, f"{self.solver}: {type(err).__name__}: {err}"
+        elapsed = time.perf_counter() - start
+        if x is None or not np.all(np.isfinite(x)):
+            x, found = np.full(problem.n, np.nan), False
+            reason = reason or f"{self.solver}: non-finite solution"
+        return QpResult(found=found, x=np.asarray(x, dtype=float), solve_time_s=elapsed,
+                        status="optimal" if found else "failed", reason=reason)
+
+
+if qpsolvers is not None:
+    for _solver in SOLVERS:
+        if _solver in qpsolvers.available_solvers:
+            register_backend(f"qpsolvers:{_solver}", partial(QpsolversBackend, _solver))
+        else:
+            register_missing(f"qpsolvers:{_solver}",
+                             f"qpsolvers does not see solver {_solver!r} on this machine")

@@ -1,0 +1,86 @@
+"""Every gain, weight, limit and choice of the whole-body controller, validated."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from wbc.validation import as_float
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """Parameters of :class:`wbc.WholeBodyController`; defaults are tuned for the GO2.
+
+    Gains are per task: ``*_kp`` [1/s^2]; damping is critical (``2 sqrt(kp)``).
+    Weights are relative cost weights of the task terms.
+    """
+
+    #: QP backend name (``wbc.backends.available_backends()`` lists them).
+    backend: str = "daqp"
+    #: Control period [s]; the controller is meant to run at 1 kHz.
+    control_period_s: float = 1e-3
+    #: Friction coefficient of the contact model (below the floor's, for margin).
+    friction_coefficient: float = 0.6
+    #: Minimum normal force of a loaded stance foot [N].
+    min_normal_force_n: float = 10.0
+    #: Maximum normal force of a stance foot [N].
+    max_normal_force_n: float = 250.0
+    #: Fraction of the URDF effort limits the controller may use (0.9: 10% headroom).
+    torque_limit_fraction: float = 0.9
+    com_kp: float = 150.0
+    com_weight: float = 20.0
+    base_orientation_kp: float = 150.0
+    base_orientation_weight: float = 10.0
+    foot_kp: float = 900.0
+    foot_weight: float = 30.0
+    posture_kp: float = 25.0
+    posture_weight: float = 0.1
+    #: Damping of a stance foot's residual velocity [1/s] (stops slip).
+    contact_damping: float = 10.0
+    #: Regularisation of the contact forces (pulls them towards an even split).
+    force_weight: float = 1e-4
+    #: Pull of the accelerations towards the previous tick's (smooth commands).
+    acceleration_rate_weight: float = 1e-3
+    #: Pull of the contact forces towards the previous tick's (smooth commands).
+    force_rate_weight: float = 1e-3
+    #: Regularisation of the accelerations (keeps the QP strictly convex).
+    acceleration_weight: float = 1e-6
+    #: Margin of the centre of mass inside the support polygon [m].
+    support_margin_m: float = 0.015
+    #: Natural frequency of the support-polygon barrier [rad/s].
+    support_omega: float = 8.0
+    #: Weight of the support-polygon slack (the constraint is soft).
+    support_slack_weight: float = 1e3
+    #: Horizon over which joint position limits become acceleration bounds [s].
+    joint_limit_horizon_s: float = 0.05
+    #: Joint damping of the safe fallback command [N m s / rad].
+    fallback_damping: float = 2.0
+
+    def __post_init__(self) -> None:
+        positive = {"control_period_s", "friction_coefficient", "max_normal_force_n",
+                    "torque_limit_fraction", "joint_limit_horizon_s", "support_omega"}
+        for f in fields(self):
+            if f.name == "backend":
+                if not isinstance(self.backend, str) or not self.backend:
+                    raise_config("backend", self.backend, "a backend name")
+                continue
+            value = getattr(self, f.name)
+            as_float(f.name, value, low=0.0, low_inclusive=f.name not in positive)
+        as_float("torque_limit_fraction", self.torque_limit_fraction, low=0.0, high=1.0,
+                 low_inclusive=False)
+        as_float("friction_coefficient", self.friction_coefficient, low=0.0, high=5.0,
+                 low_inclusive=False)
+        if self.min_normal_force_n >= self.max_normal_force_n:
+            from wbc.errors import ConfigurationError
+
+            raise ConfigurationError(
+                f"min_normal_force_n: expected less than max_normal_force_n "
+                f"({self.max_normal_force_n:g} N), received {self.min_normal_force_n:g} N"
+            )
+
+
+def raise_config(name: str, value: object, expected: str) -> None:
+    """Raise a :class:`ConfigurationError` naming the field, the value and what is valid."""
+    from wbc.errors import ConfigurationError
+
+    raise ConfigurationError(f"{name}: expected {expected}, received {value!r}")

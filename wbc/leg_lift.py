@@ -1,0 +1,318 @@
+"""Lifting one foot without a binary contact switch: shift, unload, raise, hold, and back."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbc.description import LEGS
+from wbc.errors import ConfigurationError, ReachabilityError
+from wbc.min_jerk import min_jerk, min_jerk_segment
+from wbc.support_polygon import SupportPolygon
+from wbc.validation import as_float, check_name
+from wbc.whole_body_controller import LEG_REACH_M, WholeBodyController
+
+#: Foot heights [m] (foot centre above the ground) the lift accepts.
+MIN_HEIGHT_M, MAX_HEIGHT_M = 0.10, 0.50
+
+
+class LiftPhase(str, enum.Enum):
+    """Phases of a leg lift, in order."""
+
+    SHIFTING = "shifting"            # centre of mass into the other three feet's triangle
+    UNLOADING = "unloading"          # the foot's normal-force bound ramps to zero
+    RAISING = "raising"              # the released foot rises to its target
+    HOLDING = "holding"              # the foot holds its target
+    LOWERING = "lowering"            # the foot returns to its ground point
+    RELOADING = "reloading"          # the foot's normal-force bound ramps back up
+    SHIFTING_BACK = "shifting_back"  # centre of mass back to the four-leg stance
+    DONE = "done"
+
+
+@dataclass(frozen=True)
+class LegLiftTiming:
+    """Durations [s] of the phases, and how fast an interrupted lift unwinds."""
+
+    shift_s: float = 1.0
+    unload_s: float = 0.4
+    raise_s: float = 1.5
+    lower_s: float = 1.5
+    reload_s: float = 0.4
+    shift_back_s: float = 1.0
+    #: Average foot speed [m/s] when an interrupted lift puts the foot down.
+    unwind_speed_mps: float = 0.6
+    #: Reload and shift-back time [s] of an interrupted lift (they overlap).
+    unwind_reload_s: float = 0.3
+    unwind_shift_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name, value in self.__dict__.items():
+            as_float(name, value, low=0.0, low_inclusive=False)
+        if self.unload_s < 0.3 or self.reload_s < 0.3:
+            raise ConfigurationError(
+                f"unload_s/reload_s: expected at least 0.3 s for a smooth force ramp, received "
+                f"{self.unload_s:g} s and {self.reload_s:g} s"
+            )
+
+
+class LegLift:
+    """Drives a :class:`WholeBodyController`'s references through one leg lift.
+
+    Call :meth:`start` once, then :meth:`update` every control tick before
+    ``controller.step``; :meth:`request_lower` interrupts the lift at any phase and brings
+    the robot back to four loaded feet in bounded time. Positions are world-frame [m].
+
+    The foot target is ``forward_m`` in front of the leg's thigh joint (its shoulder) and
+    ``lateral_m`` outward, at ``height_m`` above the ground (the foot sphere's centre).
+    """
+
+    def __init__(self, controller: WholeBodyController, *, leg: str = "FR",
+                 height_m: float = 0.40, hold_s: float = 2.0, forward_m: float = 0.20,
+                 lateral_m: float = 0.0, shift_margin_m: float = 0.04,
+                 touchdown_press_m: float = 0.001, timing: LegLiftTiming | None = None):
+        """Args:
+            controller: The whole-body controller whose references this drives.
+            leg: The leg to raise (``FL``, ``FR``, ``RL`` or ``RR``).
+            height_m: Target height of the foot centre above the ground [m].
+            hold_s: Time to hold the foot at its target [s].
+            forward_m: Target distance in front of the thigh joint [m].
+            lateral_m: Target distance outward from the thigh joint [m].
+            shift_margin_m: Margin [m] of the shifted centre of mass inside the triangle.
+            touchdown_press_m: How far below its old ground point the foot is aimed [m], so
+                that it surely touches before it is reloaded.
+            timing: Phase durations.
+        """
+        self.controller = controller
+        self.leg = check_name("leg", leg, LEGS)
+        self.height_m = as_float("height_m", height_m, low=MIN_HEIGHT_M, high=MAX_HEIGHT_M)
+        self.hold_s = as_float("hold_s", hold_s, low=0.0)
+        self.forward_m = as_float("forward_m", forward_m, low=-0.1, high=0.3)
+        self.lateral_m = as_float("lateral_m", lateral_m, low=-0.05, high=0.15)
+        self.shift_margin_m = as_float("shift_margin_m", shift_margin_m, low=0.0, high=0.07)
+        self.touchdown_press_m = as_float("touchdown_press_m", touchdown_press_m, low=0.0,
+                                          high=0.01)
+        self.timing = timing or LegLiftTiming()
+        self.phase: LiftPhase | None = None
+        self.interrupted = False
+        self._progress = 0.0
+
+    # ------------------------------------------------------------------ planning
+
+    def start(self, now_s: float) -> None:
+        """Plan the lift from the controller's last state and begin shifting.
+
+        Raises:
+            ReachabilityError: The foot target is out of the leg's reach; nothing changed.
+            ConfigurationError: The leg is not in stance.
+        """
+        ctrl = self.controller
+        if self.leg not in ctrl.stance_legs or len(ctrl.stance_legs) < 4:
+            raise ConfigurationError(
+                f"leg: the lift needs all four feet in stance, stance now: {ctrl.stance_legs}"
+            )
+        data = ctrl.data
+        frames = ctrl.contact_task.frame_ids
+        feet = {leg: data.oMf[fid].translation.copy() for leg, fid in zip(LEGS, frames)}
+        others = np.array([feet[leg][:2] for leg in LEGS if leg != self.leg])
+        com0 = np.array(ctrl.com_task.target, dtype=float)
+        shifted = SupportPolygon(margin_m=self.shift_margin_m).closest_inside(others, com0)
+        shift = np.array([shifted[0] - com0[0], shifted[1] - com0[1], 0.0])
+        side = 1.0 if feet[self.leg][1] > data.com[0][1] else -1.0
+        shoulder = data.oMi[ctrl.model.getJointId(f"{self.leg}_thigh_joint")].translation + shift
+        target = np.array([shoulder[0] + self.forward_m, shoulder[1] + side * self.lateral_m,
+                           self.height_m])
+        distance = float(np.linalg.norm(target - shoulder))
+        if distance > LEG_REACH_M:
+            raise ReachabilityError(
+                f"height_m: a foot target at {self.height_m:.3f} m is {distance:.3f} m from the "
+                f"{self.leg} thigh joint, beyond its reach of {LEG_REACH_M:.2f} m; valid heights: "
+                f"[{MIN_HEIGHT_M:.2f}, {MAX_HEIGHT_M:.2f}] m"
+            )
+        self.com_home = com0
+        self.com_shifted = com0 + shift
+        self.foot_ground = feet[self.leg]
+        self.foot_touch = self.foot_ground - np.array([0.0, 0.0, self.touchdown_press_m])
+        self.foot_target = target
+        self._foot_ref = self.foot_ground.copy()
+        self._com_ref = com0.copy()
+        self._enter(LiftPhase.SHIFTING, now_s, duration=self.timing.shift_s)
+        self._from = self._com_ref.copy()
+        self._to = self.com_shifted
+
+    def _enter(self, phase: LiftPhase, now_s: float, *, duration: float) -> None:
+        self.phase = phase
+        self._t0 = now_s
+        self._duration = max(duration, 1e-3)
+
+    @property
+    def nominal_duration_s(self) -> float:
+        """Duration [s] of the whole lift when not interrupted."""
+        t = self.timing
+        return (t.shift_s + t.unload_s + t.raise_s + self.hold_s + t.lower_s + t.reload_s
+                + t.shift_back_s)
+
+    # ------------------------------------------------------------------ ticking
+
+    def update(self, now_s: float) -> LiftPhase:
+        """Set the controller's references for time ``now_s`` [s]; returns the phase."""
+        if self.phase is None:
+            raise ConfigurationError("LegLift.update: call start(now_s) first")
+        ctrl, t = self.controller, self.timing
+        elapsed = now_s - self._t0
+        done = elapsed >= self._duration
+        phase = self.phase
+        if phase in (LiftPhase.SHIFTING, LiftPhase.SHIFTING_BACK):
+            self._track_com(elapsed)
+            if done and phase is LiftPhase.SHIFTING:
+                self._fmax_from = ctrl.max_normal_force(self.leg)
+                self._enter(LiftPhase.UNLOADING, now_s, duration=t.unload_s)
+            elif done:
+                self._enter(LiftPhase.DONE, now_s, duration=0.0)
+        elif phase is LiftPhase.UNLOADING:
+            s = min_jerk(elapsed / self._duration)[0]
+            ctrl.set_max_normal_force(self.leg, self._fmax_from * (1.0 - s))
+            if done:
+                ctrl.set_swing(self.leg)
+                self._start_foot_motion(now_s, LiftPhase.RAISING, self.foot_target, t.raise_s)
+        elif phase in (LiftPhase.RAISING, LiftPhase.LOWERING):
+            self._track_foot(elapsed, lead_z=phase is LiftPhase.RAISING)
+            if done and phase is LiftPhase.RAISING:
+                self._enter(LiftPhase.HOLDING, now_s, duration=self.hold_s)
+            elif done:
+                ctrl.set_stance(self.leg, max_normal_force_n=0.0)
+                self._enter(LiftPhase.RELOADING, now_s,
+                            duration=t.unwind_reload_s if self.interrupted else t.reload_s)
+                self._from, self._to = self._com_ref.copy(), self.com_home
+                self._shift_t0 = now_s
+        elif phase is LiftPhase.HOLDING:
+            ctrl.set_foot_target(self.leg, self.foot_target)
+            self.controller.foot_tasks[self.leg].set_feedforward(np.zeros(3))
+            if done:
+                self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
+        elif phase is LiftPhase.RELOADING:
+            s = min_jerk(elapsed / self._duration)[0]
+            ctrl.set_max_normal_force(self.leg, s * ctrl.config.max_normal_force_n)
+            if self.interrupted:  # an unwind shifts back while it reloads
+                self._track_com(now_s - self._shift_t0, duration=t.unwind_shift_s)
+            if done and self.interrupted:
+                # Carry on with the shift already under way.
+                self._enter(LiftPhase.SHIFTING_BACK, self._shift_t0, duration=t.unwind_shift_s)
+            elif done:
+                self._from, self._to = self._com_ref.copy(), self.com_home
+                self._enter(LiftPhase.SHIFTING_BACK, now_s, duration=t.shift_back_s)
+        self._update_progress(now_s)
+        return self.phase
+
+    def _track_com(self, elapsed: float, duration: float | None = None) -> None:
+        duration = self._duration if duration is None else duration
+        p, v, a = min_jerk_segment(self._from, self._to, elapsed, duration)
+        self._com_ref = p
+        self.controller.set_com_target(p, v)
+        self.controller.com_task.set_feedforward(a)
+
+    def _start_foot_motion(self, now_s: float, phase: LiftPhase, end: np.ndarray,
+                           nominal_s: float) -> None:
+        start = self._foot_ref.copy()
+        if self.interrupted:
+            distance = float(np.linalg.norm(end - start))
+            nominal_s = float(np.clip(distance / self.timing.unwind_speed_mps, 0.3, nominal_s))
+        self._from, self._to = start, np.array(end, dtype=float)
+        self._enter(phase, now_s, duration=nominal_s)
+
+    def _track_foot(self, elapsed: float, *, lead_z: bool) -> None:
+        """Minimum-jerk foot path; the vertical motion leads when rising, lags when lowering.
+
+        Rising, the horizontal motion starts after a quarter of the time (the foot leaves
+        the ground vertically); lowering, it ends a quarter early (the foot lands vertically).
+        """
+        tau = elapsed / self._duration
+        T = self._duration
+        if lead_z:
+            txy, kxy = (tau - 0.25) / 0.75, 1.0 / (0.75 * T)
+        else:
+            txy, kxy = tau / 0.75, 1.0 / (0.75 * T)
+        sz, dsz, ddsz = min_jerk(tau)
+        sxy, dsxy, ddsxy = min_jerk(txy)
+        delta = self._to - self._from
+        scale = np.array([sxy, sxy, sz])
+        rate = np.array([dsxy * kxy, dsxy * kxy, dsz / T])
+        accel = np.array([ddsxy * kxy * kxy, ddsxy * kxy * kxy, ddsz / (T * T)])
+        self._foot_ref = self._from + scale * delta
+        self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta)
+        self.controller.foot_tasks[self.leg].set_feedforward(accel * delta)
+
+    # ------------------------------------------------------------------ interruption
+
+    def request_lower(self, now_s: float) -> None:
+        """Interrupt: put the foot down and return to four loaded feet, from any phase.
+
+        The unwind takes at most ``lower_s + unwind_reload_s`` seconds (less when the foot is
+        low): lowering at ``unwind_speed_mps``, then reloading while shifting back.
+        """
+        if self.phase is None or self.interrupted or self.phase is LiftPhase.DONE:
+            self.interrupted = True
+            return
+        self.interrupted = True
+        t, ctrl = self.timing, self.controller
+        self._progress_at_interrupt = self._progress
+        self._interrupt_s = now_s
+        if self.phase is LiftPhase.SHIFTING:
+            self._from, self._to = self._com_ref.copy(), self.com_home
+            self._enter(LiftPhase.SHIFTING_BACK, now_s, duration=t.unwind_shift_s)
+        elif self.phase is LiftPhase.UNLOADING:
+            fmax = ctrl.max_normal_force(self.leg)
+            full = ctrl.config.max_normal_force_n
+            # Continue the reload ramp from the current bound.
+            s0 = fmax / full
+            self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * t.unwind_reload_s,
+                        duration=t.unwind_reload_s)
+            self._from, self._to = self._com_ref.copy(), self.com_home
+            self._shift_t0 = now_s
+        elif self.phase in (LiftPhase.RAISING, LiftPhase.HOLDING):
+            self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
+        # LOWERING, RELOADING and SHIFTING_BACK already lead back to four feet.
+
+    @staticmethod
+    def _inverse_ramp(s: float) -> float:
+        """The time fraction at which the minimum-jerk ramp reaches ``s`` (bisection)."""
+        low, high = 0.0, 1.0
+        for _ in range(40):
+            mid = 0.5 * (low + high)
+            if min_jerk(mid)[0] < s:
+                low = mid
+            else:
+                high = mid
+        return 0.5 * (low + high)
+
+    # ------------------------------------------------------------------ progress
+
+    @property
+    def progress(self) -> float:
+        """Fraction of the lift done, 0 to 1, never decreasing (also across an interrupt)."""
+        return self._progress
+
+    def _update_progress(self, now_s: float) -> None:
+        if self.phase is LiftPhase.DONE:
+            self._progress = 1.0
+            return
+        if self.interrupted:
+            bound = self.timing.lower_s + self.timing.unwind_reload_s + self.timing.unwind_shift_s
+            fraction = min((now_s - self._interrupt_s) / bound, 0.99)
+            start = getattr(self, "_progress_at_interrupt", self._progress)
+            estimate = start + (1.0 - start) * fraction
+        else:
+            t = self.timing
+            order = [(LiftPhase.SHIFTING, t.shift_s), (LiftPhase.UNLOADING, t.unload_s),
+                     (LiftPhase.RAISING, t.raise_s), (LiftPhase.HOLDING, self.hold_s),
+                     (LiftPhase.LOWERING, t.lower_s), (LiftPhase.RELOADING, t.reload_s),
+                     (LiftPhase.SHIFTING_BACK, t.shift_back_s)]
+            done = 0.0
+            for phase, duration in order:
+                if phase is self.phase:
+                    done += min(max(now_s - self._t0, 0.0), duration)
+                    break
+                done += duration
+            estimate = min(done / self.nominal_duration_s, 0.999)
+        self._progress = max(self._progress, estimate)

@@ -1,0 +1,35 @@
+"""Minimum-jerk interpolation: zero velocity and acceleration at both ends."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def min_jerk(tau: float) -> tuple[float, float, float]:
+    """Phase ``s``, ``ds/dtau`` and ``d2s/dtau2`` of the minimum-jerk profile at ``tau``.
+
+    ``s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5``, clamped to ``[0, 1]`` outside ``[0, 1]``.
+    """
+    if tau <= 0.0:
+        return 0.0, 0.0, 0.0
+    if tau >= 1.0:
+        return 1.0, 0.0, 0.0
+    t2 = tau * tau
+    s = t2 * tau * (10.0 - 15.0 * tau + 6.0 * t2)
+    ds = 30.0 * t2 * (1.0 - tau) ** 2
+    dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
+    return s, ds, dds
+
+
+def min_jerk_segment(start: np.ndarray, end: np.ndarray, elapsed_s: float,
+                     duration_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position, velocity and acceleration on a minimum-jerk line from ``start`` to ``end``.
+
+    Args:
+        start, end: End points (any shape, same units).
+        elapsed_s: Time since the segment began [s].
+        duration_s: Segment duration [s] (> 0).
+    """
+    s, ds, dds = min_jerk(elapsed_s / duration_s)
+    delta = np.asarray(end) - np.asarray(start)
+    return start + s * delta, (ds / duration_s) * delta, (dds / duration_s**2) * delta

@@ -1,0 +1,490 @@
+"""The whole-body inverse-dynamics QP controller of the GO2."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from tasks import BaseOrientationTask, ComTask, ContactTask, FramePositionTask, PostureTask
+from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
+from wbc.control_output import ControlOutput, ControlStatus
+from wbc.controller_config import ControllerConfig
+from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
+from wbc.errors import ConfigurationError, ReachabilityError
+from wbc.support_polygon import SupportPolygon
+from wbc.validation import as_float, as_vector, check_name
+
+_NV, _NJ, _NC = 18, 12, 4
+_F0 = _NV                  # first force variable
+_S = _NV + 3 * _NC         # the support-polygon slack variable
+_N = _S + 1                # number of variables
+_DYN = slice(0, 6)         # floating-base equations of motion
+_CON = slice(6, 18)        # stance feet do not accelerate
+_TAU = slice(18, 30)       # torque limits
+_FRIC = slice(30, 46)      # friction pyramids
+_SUP = slice(46, 50)       # centre of mass inside the support polygon (soft)
+_M = 50
+_LEG_INDEX = {leg: i for i, leg in enumerate(LEGS)}
+_GROUPS = (("dynamics", _DYN), ("stance contacts", _CON), ("torque limits", _TAU),
+           ("friction", _FRIC), ("support polygon", _SUP))
+#: Thigh + calf length of a GO2 leg [m], less a margin that keeps the knee bent.
+LEG_REACH_M = 0.40
+
+
+class WholeBodyController:
+    """Force-level whole-body control of the GO2 by one QP per tick.
+
+    Decision variables ``x = [qdd (18), f (4 x 3), s]``: generalized accelerations, world
+    contact forces of the four feet, and one slack of the support-polygon constraint.
+    Torques are recovered from the equations of motion, ``tau = M_a qdd + h_a - J_a^T f``,
+    so the QP stays at 31 variables whatever the contacts. Minimises the weighted task
+    errors (centre of mass, base orientation, swing feet, posture), a torque-rate term and
+    small regularisations, subject to:
+
+    - the floating-base rows of the equations of motion ``M_u qdd + h_u = J_u^T f``;
+    - stance feet fixed: ``J_c qdd + Jdot_c v = -kd v_c``;
+    - friction pyramids, with minimum and maximum normal force per foot (a swing foot's
+      force is zero; a foot being unloaded has its maximum ramped down by the caller);
+    - torque limits (a fraction of the URDF's), joint position and velocity limits as
+      acceleration bounds;
+    - the centre of mass inside the support polygon with a margin, as a soft barrier.
+
+    Example:
+        >>> controller = WholeBodyController()            # GO2, DAQP, default gains
+        >>> controller.reset(q)                           # hold the current pose
+        >>> out = controller.step(q, v)                   # 1 kHz
+        >>> out.tau, out.status, out.timings["total"]
+    """
+
+    def __init__(self, config: ControllerConfig | None = None, *,
+                 description: Go2Description | None = None, **overrides: Any):
+        """Args:
+            config: All parameters (see :class:`ControllerConfig`); defaults when ``None``.
+            description: The robot files (found automatically by default).
+            **overrides: Fields of :class:`ControllerConfig` to change, e.g. ``backend="osqp"``.
+        """
+        base = config or ControllerConfig()
+        unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
+        if unknown:
+            valid = ", ".join(ControllerConfig.__dataclass_fields__)
+            raise ConfigurationError(f"unknown parameter(s) {unknown}; valid parameters: {valid}")
+        self.config = replace(base, **overrides)
+        cfg = self.config
+        self.description = description or Go2Description()
+        self.model = self.description.build_model()
+        self.data = self.model.createData()
+        self.backend = make_backend(cfg.backend)
+        self.tau_max = cfg.torque_limit_fraction * self.description.effort_limit
+
+        self.com_task = ComTask(kp=cfg.com_kp, weight=cfg.com_weight)
+        self.base_task = BaseOrientationTask(kp=cfg.base_orientation_kp,
+                                             weight=cfg.base_orientation_weight)
+        self.posture_task = PostureTask(kp=cfg.posture_kp, weight=cfg.posture_weight)
+        self.foot_tasks = {leg: FramePositionTask(self.model, FOOT_FRAMES[leg], kp=cfg.foot_kp,
+                                                  weight=cfg.foot_weight) for leg in LEGS}
+        self.contact_task = ContactTask(self.model, [FOOT_FRAMES[leg] for leg in LEGS],
+                                        kd=cfg.contact_damping, radius_m=FOOT_RADIUS_M)
+        self._thigh_joint = {leg: self.model.getJointId(f"{leg}_thigh_joint") for leg in LEGS}
+        self.support = SupportPolygon(margin_m=cfg.support_margin_m)
+
+        self._stance = dict.fromkeys(LEGS, True)
+        self._max_force = dict.fromkeys(LEGS, cfg.max_normal_force_n)
+        self._build_problem()
+        self._contacts_changed()
+        self._tau_prev = np.zeros(_NJ)
+        self._tau_good = np.zeros(_NJ)
+        self._q: np.ndarray | None = None
+        self.ticks = 0
+        self.failures = 0
+
+    # ------------------------------------------------------------------ references
+
+    def reset(self, q: np.ndarray, v: np.ndarray | None = None) -> None:
+        """Hold the given state: every target is set from it, all four feet in stance.
+
+        The base orientation target keeps the current yaw with zero roll and pitch.
+        """
+        q = as_vector("q", q, self.model.nq)
+        v = np.zeros(_NV) if v is None else as_vector("v", v, _NV)
+        self._update_model(q, v)
+        self.com_task.set_target(self.data.com[0])
+        yaw = pin.rpy.matrixToRpy(self.data.oMi[1].rotation)[2]
+        self.base_task.set_rpy(0.0, 0.0, yaw)
+        self.posture_task.set_target(q[7:])
+        for leg, task in self.foot_tasks.items():
+            task.set_target(self.data.oMf[task.frame_id].translation)
+        for leg in LEGS:
+            self._stance[leg] = True
+            self._max_force[leg] = self.config.max_normal_force_n
+        self._contacts_changed()
+        gravity = pin.computeGeneralizedGravity(self.model, self.data, q)
+        self._tau_prev = self._static_torques(q, gravity)
+        self._tau_good = self._tau_prev.copy()
+        self.backend.setup(self.problem)
+
+    def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None) -> None:
+        """Centre-of-mass target [m] (and velocity [m/s]), world frame."""
+        self.com_task.set_target(position, velocity)
+
+    def set_foot_target(self, leg: str, position: np.ndarray,
+                        velocity: np.ndarray | None = None) -> None:
+        """World target [m] (and velocity [m/s]) of a foot, tracked while the leg swings.
+
+        Raises:
+            ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
+                thigh joint at the last state; the target is left unchanged.
+        """
+        check_name("leg", leg, LEGS)
+        position = as_vector(f"{leg}_foot target", position, 3)
+        if self._q is not None:
+            shoulder = self.data.oMi[self._thigh_joint[leg]].translation
+            distance = float(np.linalg.norm(position - shoulder))
+            if distance > LEG_REACH_M:
+                raise ReachabilityError(
+                    f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
+                    f"the {leg} thigh joint; reachable: at most {LEG_REACH_M:.2f} m"
+                )
+        self.foot_tasks[leg].set_target(position, velocity)
+
+    def set_swing(self, leg: str) -> None:
+        """Release a foot: no contact force, its position task takes over.
+
+        Its target starts at its current position. At least three feet must stay in stance.
+        """
+        check_name("leg", leg, LEGS)
+        if self._stance[leg] and sum(self._stance.values()) <= 3:
+            raise ConfigurationError(
+                f"leg: cannot release {leg}: at least three feet must stay in stance "
+                f"(stance now: {', '.join(self.stance_legs)})"
+            )
+        if self._stance[leg] and self._q is not None:
+            task = self.foot_tasks[leg]
+            task.set_target(self.data.oMf[task.frame_id].translation)
+        self._stance[leg] = False
+        self._max_force[leg] = 0.0
+        self._contacts_changed()
+
+    def set_stance(self, leg: str, *, max_normal_force_n: float = 0.0) -> None:
+        """Make a foot a stance contact with the given maximum normal force [N].
+
+        Start at zero and ramp it up with :meth:`set_max_normal_force` for a smooth touch-down.
+        """
+        check_name("leg", leg, LEGS)
+        self.set_max_normal_force(leg, max_normal_force_n, _allow_swing=True)
+        self._stance[leg] = True
+        self._contacts_changed()
+
+    def set_max_normal_force(self, leg: str, value_n: float, *, _allow_swing: bool = False) -> None:
+        """Upper bound [N] of a stance foot's normal force (ramp it to unload or reload)."""
+        check_name("leg", leg, LEGS)
+        value = as_float(f"{leg} max_normal_force_n", value_n, low=0.0,
+                         high=self.config.max_normal_force_n)
+        if not self._stance[leg] and not _allow_swing:
+            raise ConfigurationError(
+                f"leg: {leg} is in swing; call set_stance({leg!r}) before loading it"
+            )
+        self._max_force[leg] = value
+        self._contacts_changed()
+
+    @property
+    def stance_legs(self) -> list[str]:
+        """Legs currently in stance."""
+        return [leg for leg in LEGS if self._stance[leg]]
+
+    def max_normal_force(self, leg: str) -> float:
+        """Current upper bound [N] of a foot's normal force."""
+        check_name("leg", leg, LEGS)
+        return self._max_force[leg]
+
+    def support_legs(self) -> list[str]:
+        """Stance legs that are fully loaded: the corners of the support polygon."""
+        full = self.config.max_normal_force_n
+        return [leg for leg in LEGS if self._stance[leg] and self._max_force[leg] >= full]
+
+    # ------------------------------------------------------------------ the tick
+
+    def step(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
+        """One control tick: model update, tasks, QP assembly and solve.
+
+        Never raises on bad numbers in the state or a failed solve: it returns the safe
+        fallback command (joint damping around the last good torques) with status
+        ``FALLBACK`` and a message, and stays usable for the next tick.
+        """
+        t0 = time.perf_counter()
+        self.ticks += 1
+        q = np.asarray(q, dtype=float)
+        v = np.asarray(v, dtype=float)
+        if q.shape != (self.model.nq,) or v.shape != (_NV,):
+            return self._fallback(v, f"state: expected q {(self.model.nq,)} and v {(_NV,)}, "
+                                     f"received {q.shape} and {v.shape}", t0)
+        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+            bad = [f"q[{i}]" for i in np.flatnonzero(~np.isfinite(q))]
+            bad += [f"v[{i}]" for i in np.flatnonzero(~np.isfinite(v))]
+            return self._fallback(v, f"state: non-finite values at {', '.join(bad)}", t0)
+        self._update_model(q, v)
+        t1 = time.perf_counter()
+        self._update_tasks(q, v)
+        t2 = time.perf_counter()
+        self._assemble(q, v)
+        t3 = time.perf_counter()
+        result = self.backend.solve(self.problem)
+        t4 = time.perf_counter()
+        if not result.found:
+            return self._fallback(v, f"QP failed: {result.reason}", t0, result=result)
+        x = result.x
+        tau = self.problem.A[_TAU, :_S] @ x[:_S] + self._h_joints
+        self._x_prev[:] = x[:_S]
+        self._tau_prev = tau
+        self._tau_good = tau
+        t5 = time.perf_counter()
+        return ControlOutput(
+            tau=tau, qdd=x[:_NV].copy(), forces=x[_F0:_S].reshape(_NC, 3).copy(),
+            status=ControlStatus.OK, task_errors=self._task_errors(),
+            timings={"model": t1 - t0, "tasks": t2 - t1, "assembly": t3 - t2,
+                     "solve": t4 - t3, "total": t5 - t0},
+        )
+
+    def _update_model(self, q: np.ndarray, v: np.ndarray) -> None:
+        model, data = self.model, self.data
+        pin.computeAllTerms(model, data, q, v)  # M, h, joint Jacobians, com, Jcom, bias acc.
+        pin.updateFramePlacements(model, data)
+        pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
+        self._q = q
+
+    def _update_tasks(self, q: np.ndarray, v: np.ndarray) -> None:
+        model, data = self.model, self.data
+        self.contact_task.update(model, data, q, v)
+        for leg in self._swing_legs:
+            self.foot_tasks[leg].update(model, data, q, v)
+        self.com_task.update(model, data, q, v)
+        self.base_task.update(model, data, q, v)
+        self.posture_task.update(model, data, q, v)
+
+    # ------------------------------------------------------------------ QP assembly
+
+    def _build_problem(self) -> None:
+        """Allocate the QP once and fill its constant entries."""
+        cfg = self.config
+        p = QpProblem(_N, _M)
+        mu = cfg.friction_coefficient
+        for i in range(_NC):
+            fx = _F0 + 3 * i
+            for axis in range(2):
+                row = _FRIC.start + 4 * i + 2 * axis
+                p.A[row, fx + axis], p.A[row, fx + 2] = 1.0, -mu      # f_t - mu f_z <= 0
+                p.upper[row] = 0.0
+                p.A[row + 1, fx + axis], p.A[row + 1, fx + 2] = 1.0, mu  # f_t + mu f_z >= 0
+                p.lower[row + 1] = 0.0
+        p.A[_SUP, _S] = 1.0
+        p.lb[_S], p.ub[_S] = 0.0, INFINITY
+        p.is_equality[_DYN] = True
+        for name, rows in _GROUPS:
+            p.row_groups[rows] = [name] * (rows.stop - rows.start)
+        self.problem = p
+        self._h_const = np.zeros((_N, _N))
+        diagonal = np.arange(_N)
+        self._diag = diagonal
+        self._h_const[diagonal[:_NV], diagonal[:_NV]] = (cfg.acceleration_weight
+                                                         + cfg.acceleration_rate_weight)
+        self._h_const[diagonal[_F0:_S], diagonal[_F0:_S]] = cfg.force_weight + cfg.force_rate_weight
+        self._h_const[_S, _S] = cfg.support_slack_weight
+        self._rate_weights = np.concatenate([np.full(_NV, cfg.acceleration_rate_weight),
+                                             np.full(3 * _NC, cfg.force_rate_weight)])
+        self._x_prev = np.zeros(_S)
+        self._m_full = np.zeros((_NV, _NV))
+        self._lower_mask = np.tril(np.ones((_NV, _NV), dtype=bool), -1)
+        self._h_joints = np.zeros(_NJ)
+        self._contact_rhs = np.zeros(3 * _NC)
+        self._dt_limit = cfg.joint_limit_horizon_s
+        self._q_low = self.description.position_lower
+        self._q_high = self.description.position_upper
+        self._v_max = self.description.velocity_limit
+        self._support_key: tuple[str, ...] | None = None
+        self._support_normals = np.zeros((0, 2))
+        self._support_offsets = np.zeros(0)
+        self._swing_legs: list[str] = []
+
+    def _contacts_changed(self) -> None:
+        """Refresh the bounds that depend on the contact modes (not on the state)."""
+        p, cfg = self.problem, self.config
+        for i, leg in enumerate(LEGS):
+            rows = slice(_CON.start + 3 * i, _CON.start + 3 * i + 3)
+            fz = _F0 + 3 * i + 2
+            if self._stance[leg]:
+                fmax = self._max_force[leg]
+                p.is_equality[rows] = True
+                p.lb[fz], p.ub[fz] = min(cfg.min_normal_force_n, fmax), fmax
+                p.lb[fz - 2:fz], p.ub[fz - 2:fz] = -INFINITY, INFINITY
+            else:
+                p.is_equality[rows] = False
+                p.lb[fz - 2:fz + 1] = p.ub[fz - 2:fz + 1] = 0.0
+        self._swing_legs = [leg for leg in LEGS if not self._stance[leg]]
+        self._support_key = None
+
+    def _assemble(self, q: np.ndarray, v: np.ndarray) -> None:
+        data, p = self.data, self.problem
+        # computeAllTerms fills only the upper triangle of M.
+        M = self._m_full
+        M[:] = data.M
+        np.copyto(M, M.T, where=self._lower_mask)
+        h = data.nle
+        self._h_joints = h[6:]
+        jc = self.contact_task.jacobian
+        A = p.A
+
+        A[_DYN, :_NV] = M[:6]
+        A[_DYN, _F0:_S] = -jc[:, :6].T
+        np.negative(h[:6], out=p.lower[_DYN])
+        p.upper[_DYN] = p.lower[_DYN]
+
+        A[_CON, :_NV] = jc
+        rhs = self._contact_rhs
+        task = self.contact_task
+        np.multiply(task.kd, task.error_rate, out=rhs)
+        rhs -= task.drift
+        p.lower[_CON] = rhs
+        p.upper[_CON] = rhs
+        for leg in self._swing_legs:
+            i = _LEG_INDEX[leg]
+            rows = slice(_CON.start + 3 * i, _CON.start + 3 * i + 3)
+            p.lower[rows], p.upper[rows] = -INFINITY, INFINITY
+
+        A[_TAU, :_NV] = M[6:]
+        A[_TAU, _F0:_S] = -jc[:, 6:].T
+        np.subtract(-self.tau_max, h[6:], out=p.lower[_TAU])
+        np.subtract(self.tau_max, h[6:], out=p.upper[_TAU])
+
+        self._assemble_support()
+        self._assemble_joint_bounds(q, v)
+
+        # Cost. Base orientation and posture Jacobians are selections: diagonal terms.
+        H, f = p.H, p.f
+        H[:] = self._h_const
+        d = self._diag
+        wo, wp = self.base_task.weight, self.posture_task.weight
+        H[d[3:6], d[3:6]] += wo
+        H[d[6:_NV], d[6:_NV]] += wp
+        com = self.com_task
+        jw = com.weight * com.jacobian.T
+        H[:_NV, :_NV] += jw @ com.jacobian
+        np.matmul(jw, com.drift - com.desired_acceleration, out=f[:_NV])
+        f[3:6] -= wo * self.base_task.desired_acceleration
+        f[6:_NV] -= wp * self.posture_task.desired_acceleration
+        for leg in self._swing_legs:
+            foot = self.foot_tasks[leg]
+            jw = foot.weight * foot.jacobian.T
+            H[:_NV, :_NV] += jw @ foot.jacobian
+            f[:_NV] += jw @ (foot.drift - foot.desired_acceleration)
+        # Smoothness: a pull towards the previous tick's solution.
+        f[_F0:_S] = 0.0
+        f[:_S] -= self._rate_weights * self._x_prev
+
+    def _assemble_support(self) -> None:
+        p, data = self.problem, self.data
+        legs = tuple(self.support_legs())
+        if legs != self._support_key:
+            self._support_key = legs
+            p.lower[_SUP], p.upper[_SUP] = -INFINITY, INFINITY
+            p.A[_SUP, :_NV] = 0.0
+            if len(legs) >= 3:
+                points = np.array([data.oMf[self.contact_task.frame_ids[_LEG_INDEX[leg]]]
+                                   .translation[:2] for leg in legs])
+                self._support_normals, self._support_offsets = self.support.halfplanes(points)
+            else:
+                self._support_normals = np.zeros((0, 2))
+        normals = self._support_normals
+        k = len(normals)
+        if k == 0:
+            return
+        omega = self.config.support_omega
+        rows = slice(_SUP.start, _SUP.start + k)
+        p.A[rows, :_NV] = normals @ data.Jcom[:2]
+        distance = normals @ data.com[0][:2] - self._support_offsets
+        bound = normals @ (data.acom[0][:2] + 2.0 * omega * data.vcom[0][:2])
+        bound += omega * omega * distance
+        np.negative(bound, out=p.lower[rows])
+
+    def _assemble_joint_bounds(self, q: np.ndarray, v: np.ndarray) -> None:
+        p, dt = self.problem, self._dt_limit
+        qj, vj = q[7:], v[6:]
+        # Stop within the horizon before a position limit; respect velocity limits.
+        upper = np.minimum(2.0 * (self._q_high - qj - vj * dt) / (dt * dt), (self._v_max - vj) / dt)
+        lower = np.maximum(2.0 * (self._q_low - qj - vj * dt) / (dt * dt), (-self._v_max - vj) / dt)
+        np.minimum(lower, upper, out=lower)
+        p.lb[6:_NV], p.ub[6:_NV] = lower, upper
+
+    def _task_errors(self) -> dict[str, float]:
+        def norm(e: np.ndarray) -> float:
+            return math.sqrt(float(e @ e))
+
+        errors = {"com": norm(self.com_task.error),
+                  "base_orientation": norm(self.base_task.error),
+                  "posture": norm(self.posture_task.error)}
+        for leg in self._swing_legs:
+            errors[f"{leg}_foot"] = norm(self.foot_tasks[leg].error)
+        return errors
+
+    # ------------------------------------------------------------------ failures
+
+    def _static_torques(self, q: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+        """Torques that hold ``q`` at rest with the body's weight on the stance feet."""
+        self.contact_task.update(self.model, self.data, q, np.zeros(_NV))
+        rows = [r for i, leg in enumerate(LEGS) if self._stance[leg]
+                for r in range(3 * i, 3 * i + 3)]
+        jc = self.contact_task.jacobian[rows]
+        forces = np.linalg.lstsq(jc[:, :6].T, gravity[:6], rcond=None)[0]
+        self._x_prev[:] = 0.0
+        self._x_prev[[_F0 + r for r in rows]] = forces
+        return gravity[6:] - jc[:, 6:].T @ forces
+
+    def _fallback(self, v: np.ndarray, message: str, t0: float,
+                  result: QpResult | None = None) -> ControlOutput:
+        """Safe command: the last good torques with joint damping, inside the limits."""
+        self.failures += 1
+        vj = np.zeros(_NJ)
+        v = np.asarray(v, dtype=float).reshape(-1)
+        if v.shape == (_NV,):
+            vj = np.where(np.isfinite(v[6:]), v[6:], 0.0)
+        tau = np.clip(self._tau_good - self.config.fallback_damping * vj, -self.tau_max,
+                      self.tau_max)
+        self._tau_prev = tau
+        group = self.diagnose() if result is not None else ""
+        if group:
+            message += f"; infeasible constraint group: {group}"
+        # The solver's workspace may hold a bad active set after a failure.
+        self.backend.setup(self.problem)
+        return ControlOutput(
+            tau=tau, qdd=np.full(_NV, np.nan), forces=np.full((_NC, 3), np.nan),
+            status=ControlStatus.FALLBACK, message=message, infeasible_group=group,
+            timings={"total": time.perf_counter() - t0},
+        )
+
+    def diagnose(self) -> str:
+        """Name the constraint group that makes the current QP infeasible ('' if none).
+
+        Re-solves copies of the problem with one group relaxed at a time (off the hot path,
+        only after a failure); the first group whose relaxation makes it solvable is named.
+        """
+        from wbc.backends.daqp_backend import DaqpBackend
+
+        groups: list[tuple[str, Any]] = [(name, rows) for name, rows in _GROUPS]
+        groups.append(("normal force bounds", "fz"))
+        groups.append(("joint limits", "joints"))
+        for name, rows in groups:
+            trial = self.problem.copy()
+            if isinstance(rows, slice):
+                trial.lower[rows], trial.upper[rows] = -INFINITY, INFINITY
+                trial.is_equality[rows] = False
+            elif rows == "fz":
+                trial.lb[_F0 + 2:_S:3], trial.ub[_F0 + 2:_S:3] = -INFINITY, INFINITY
+            else:
+                trial.lb[6:_NV], trial.ub[6:_NV] = -INFINITY, INFINITY
+            solver = DaqpBackend()
+            if solver.solve(trial).found:
+                return name
+        return ""
