@@ -127,30 +127,32 @@ class ActionClient:
         _check_seconds("stall_timeout_s", stall_timeout_s, allow_none=False)
         waiter = _Waiter(self._runner, timeout, stall_timeout_s)
         handle_future = self.send_goal_async(goal, feedback_callback)
-        handle = waiter.wait(
-            handle_future,
-            lambda: ActionTimeoutError(
-                f"the goal request to '{self.action_name}' was not processed within "
-                f"{timeout:g} s of {waiter.clock} time; it is still queued and may be "
-                "accepted by a later tick (it has NOT been withdrawn): use "
-                "err.goal_handle_future to cancel it once accepted",
-                goal_handle_future=handle_future,
-            ),
-            f"the goal request to '{self.action_name}'",
-        )
-        if not handle.accepted:
-            raise GoalRejectedError(handle.goal_id, handle.action_name, handle.rejection)
-        return waiter.wait(
-            handle.get_result_async(),
-            lambda: ActionTimeoutError(
-                f"goal {handle.goal_id} ({self.action_name}) did not finish within "
-                f"{timeout:g} s of {waiter.clock} time; it is still {handle.status.name} "
-                "and has NOT been cancelled: cancel it with client.cancel(err.goal_handle)",
-                goal_handle=handle,
-                goal_handle_future=handle_future,
-            ),
-            f"goal {handle.goal_id} ({self.action_name})",
-        )
+        handle: ClientGoalHandle | None = None
+        try:
+            handle = waiter.wait(
+                handle_future,
+                lambda: ActionTimeoutError(
+                    f"the goal request to '{self.action_name}' was not processed within "
+                    f"{timeout:g} s of {waiter.clock} time; it is still queued and may be "
+                    "accepted by a later tick (it has NOT been withdrawn): use "
+                    "err.goal_handle_future to cancel it once accepted"
+                ),
+                f"the goal request to '{self.action_name}'",
+            )
+            if not handle.accepted:
+                raise GoalRejectedError(handle.goal_id, handle.action_name, handle.rejection)
+            return waiter.wait(
+                handle.get_result_async(),
+                lambda: ActionTimeoutError(
+                    f"goal {handle.goal_id} ({self.action_name}) did not finish within "
+                    f"{timeout:g} s of {waiter.clock} time; it is still {handle.status.name} "
+                    "and has NOT been cancelled: cancel it with client.cancel(err.goal_handle)"
+                ),
+                f"goal {handle.goal_id} ({self.action_name})",
+            )
+        except ActionTimeoutError as err:
+            err.goal_handle, err.goal_handle_future = handle, handle_future
+            raise
 
 
 class _Waiter:
@@ -218,8 +220,7 @@ class _Waiter:
                         f"nothing is ticking the runner: no tick in {window:g} s (wall-clock) "
                         f"while waiting for {what}, and this thread registered no spin hook. "
                         "Call runner.tick(now_s) from a control loop thread, or register the "
-                        "loop's spin_once with runner.set_spinner(...) on this thread",
-                        goal_handle_future=None,
+                        "loop's spin_once with runner.set_spinner(...) on this thread"
                     ) from None
 
 
