@@ -12,7 +12,8 @@ from wbc.errors import ConfigurationError, ReachabilityError
 from wbc.min_jerk import min_jerk, min_jerk_segment
 from wbc.support_polygon import SupportPolygon
 from wbc.validation import as_float, check_name
-from wbc.whole_body_controller import LEG_REACH_M, WholeBodyController
+from wbc.balance_controller import BalanceController
+from wbc.whole_body_controller import LEG_REACH_M
 
 #: Foot heights [m] (foot centre above the ground) the lift accepts.
 MIN_HEIGHT_M, MAX_HEIGHT_M = 0.10, 0.50
@@ -58,7 +59,7 @@ class LegLiftTiming:
 
 
 class LegLift:
-    """Drives a :class:`WholeBodyController`'s references through one leg lift.
+    """Drives a :class:`BalanceController`'s references through one leg lift.
 
     Call :meth:`start` once, then :meth:`update` every control tick before
     ``controller.step``; :meth:`request_lower` interrupts the lift at any phase and brings
@@ -68,7 +69,7 @@ class LegLift:
     ``lateral_m`` outward, at ``height_m`` above the ground (the foot sphere's centre).
     """
 
-    def __init__(self, controller: WholeBodyController, *, leg: str = "FR",
+    def __init__(self, controller: BalanceController, *, leg: str = "FR",
                  height_m: float = 0.40, hold_s: float = 2.0, forward_m: float = 0.20,
                  lateral_m: float = 0.0, shift_margin_m: float = 0.04,
                  touchdown_press_m: float = 0.001, timing: LegLiftTiming | None = None):
@@ -112,15 +113,13 @@ class LegLift:
             raise ConfigurationError(
                 f"leg: the lift needs all four feet in stance, stance now: {ctrl.stance_legs}"
             )
-        data = ctrl.data
-        frames = ctrl.contact_task.frame_ids
-        feet = {leg: data.oMf[fid].translation.copy() for leg, fid in zip(LEGS, frames)}
+        feet = {leg: ctrl.foot_position(leg) for leg in LEGS}
         others = np.array([feet[leg][:2] for leg in LEGS if leg != self.leg])
-        com0 = np.array(ctrl.com_task.target, dtype=float)
+        com0 = ctrl.com_target
         shifted = SupportPolygon(margin_m=self.shift_margin_m).closest_inside(others, com0)
         shift = np.array([shifted[0] - com0[0], shifted[1] - com0[1], 0.0])
-        side = 1.0 if feet[self.leg][1] > data.com[0][1] else -1.0
-        shoulder = data.oMi[ctrl.model.getJointId(f"{self.leg}_thigh_joint")].translation + shift
+        side = 1.0 if feet[self.leg][1] > ctrl.com_position()[1] else -1.0
+        shoulder = ctrl.shoulder_position(self.leg) + shift
         target = np.array([shoulder[0] + self.forward_m, shoulder[1] + side * self.lateral_m,
                            self.height_m])
         distance = float(np.linalg.norm(target - shoulder))
@@ -188,12 +187,11 @@ class LegLift:
                 self._shift_t0 = now_s
         elif phase is LiftPhase.HOLDING:
             ctrl.set_foot_target(self.leg, self.foot_target)
-            self.controller.foot_tasks[self.leg].set_feedforward(np.zeros(3))
             if done:
                 self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         elif phase is LiftPhase.RELOADING:
             s = min_jerk(elapsed / self._duration)[0]
-            ctrl.set_max_normal_force(self.leg, s * ctrl.config.max_normal_force_n)
+            ctrl.set_max_normal_force(self.leg, s * ctrl.full_normal_force_n)
             if self.interrupted:  # an unwind shifts back while it reloads
                 self._track_com(now_s - self._shift_t0, duration=t.unwind_shift_s)
             if done and self.interrupted:
@@ -209,8 +207,7 @@ class LegLift:
         duration = self._duration if duration is None else duration
         p, v, a = min_jerk_segment(self._from, self._to, elapsed, duration)
         self._com_ref = p
-        self.controller.set_com_target(p, v)
-        self.controller.com_task.set_feedforward(a)
+        self.controller.set_com_target(p, v, a)
 
     def _start_foot_motion(self, now_s: float, phase: LiftPhase, end: np.ndarray,
                            nominal_s: float) -> None:
@@ -240,8 +237,7 @@ class LegLift:
         rate = np.array([dsxy * kxy, dsxy * kxy, dsz / T])
         accel = np.array([ddsxy * kxy * kxy, ddsxy * kxy * kxy, ddsz / (T * T)])
         self._foot_ref = self._from + scale * delta
-        self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta)
-        self.controller.foot_tasks[self.leg].set_feedforward(accel * delta)
+        self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta, accel * delta)
 
     # ------------------------------------------------------------------ interruption
 
@@ -263,7 +259,7 @@ class LegLift:
             self._enter(LiftPhase.SHIFTING_BACK, now_s, duration=t.unwind_shift_s)
         elif self.phase is LiftPhase.UNLOADING:
             fmax = ctrl.max_normal_force(self.leg)
-            full = ctrl.config.max_normal_force_n
+            full = ctrl.full_normal_force_n
             # Continue the reload ramp from the current bound.
             s0 = fmax / full
             self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * t.unwind_reload_s,

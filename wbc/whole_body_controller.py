@@ -127,13 +127,42 @@ class WholeBodyController:
         self._tau_good = self._tau_prev.copy()
         self.backend.setup(self.problem)
 
-    def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None) -> None:
-        """Centre-of-mass target [m] (and velocity [m/s]), world frame."""
+    def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
+                       acceleration: np.ndarray | None = None) -> None:
+        """Centre-of-mass target [m], velocity [m/s] and feed-forward acceleration [m/s^2]."""
         self.com_task.set_target(position, velocity)
+        self.com_task.set_feedforward(np.zeros(3) if acceleration is None else acceleration)
+
+    @property
+    def com_target(self) -> np.ndarray:
+        """The current centre-of-mass target [m] (a copy)."""
+        return np.array(self.com_task._require_target(self.com_task.target))
+
+    def com_position(self) -> np.ndarray:
+        """Centre of mass [m] at the last state."""
+        return self.data.com[0].copy()
+
+    def foot_position(self, leg: str) -> np.ndarray:
+        """World position [m] of a foot frame (sphere centre) at the last state."""
+        check_name("leg", leg, LEGS)
+        return self.data.oMf[self.contact_task.frame_ids[_LEG_INDEX[leg]]].translation.copy()
+
+    def shoulder_position(self, leg: str) -> np.ndarray:
+        """World position [m] of a leg's thigh joint at the last state."""
+        check_name("leg", leg, LEGS)
+        return self.data.oMi[self._thigh_joint[leg]].translation.copy()
+
+    @property
+    def full_normal_force_n(self) -> float:
+        """The normal-force bound [N] of a fully loaded stance foot."""
+        return self.config.max_normal_force_n
 
     def set_foot_target(self, leg: str, position: np.ndarray,
-                        velocity: np.ndarray | None = None) -> None:
-        """World target [m] (and velocity [m/s]) of a foot, tracked while the leg swings.
+                        velocity: np.ndarray | None = None,
+                        acceleration: np.ndarray | None = None) -> None:
+        """World target [m], velocity [m/s] and feed-forward acceleration of a foot.
+
+        Tracked while the leg swings.
 
         Raises:
             ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
@@ -150,6 +179,7 @@ class WholeBodyController:
                     f"the {leg} thigh joint; reachable: at most {LEG_REACH_M:.2f} m"
                 )
         self.foot_tasks[leg].set_target(position, velocity)
+        self.foot_tasks[leg].set_feedforward(np.zeros(3) if acceleration is None else acceleration)
 
     def set_swing(self, leg: str) -> None:
         """Release a foot: no contact force, its position task takes over.
