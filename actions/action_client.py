@@ -7,8 +7,6 @@ the blocking shortcut, usable with or without a thread that ticks the runner.
 
 from __future__ import annotations
 
-import math
-import numbers
 import time
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -21,6 +19,7 @@ from actions.errors import (
     GoalRejectedError,
     RunnerStalledError,
 )
+from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError
 
 if TYPE_CHECKING:
@@ -227,11 +226,6 @@ class _Waiter:
 def _check_seconds(name: str, value: Any, *, allow_none: bool) -> None:
     if value is None and allow_none:
         return
-    if (
-        not isinstance(value, numbers.Real)
-        or isinstance(value, bool)
-        or not math.isfinite(value)
-        or value <= 0
-    ):
+    if not is_finite_real(value) or value <= 0:
         valid = "None or a finite number of seconds > 0" if allow_none else "a finite number > 0"
         raise ConfigurationError(f"{name} must be {valid}; received {value!r}")

@@ -22,8 +22,6 @@ and never break the tick.
 from __future__ import annotations
 
 import logging
-import math
-import numbers
 import threading
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -45,6 +43,7 @@ from actions.responses import (
     RejectionCode,
     WrappedResult,
 )
+from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError, UnknownNameError
 
 if TYPE_CHECKING:
@@ -372,11 +371,7 @@ class ActionRunner:
                 "the control loop, after the current tick returns"
             )
         with self._tick_lock:
-            if (
-                not isinstance(now_s, numbers.Real)
-                or isinstance(now_s, bool)
-                or not math.isfinite(now_s)
-            ):
+            if not is_finite_real(now_s):
                 raise ConfigurationError(f"now_s must be a finite time [s]; received {now_s!r}")
             if self._now_s is not None and now_s < self._now_s:
                 raise ConfigurationError(

@@ -9,14 +9,13 @@ owns the robot and runs one goal at a time) and the execute callback is a factor
 from __future__ import annotations
 
 import logging
-import math
-import numbers
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from actions.action_type import ActionType
 from actions.behaviour import Behaviour
 from actions.responses import GoalResponse, Rejection, RejectionCode
+from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError
 
 if TYPE_CHECKING:
@@ -80,12 +79,7 @@ class ActionServer:
                 raise ConfigurationError(f"{label} must be callable; received {value!r}")
         if behaviour_factory is None:
             raise ConfigurationError("behaviour_factory is required; received None")
-        if (
-            not isinstance(max_unwind_s, numbers.Real)
-            or isinstance(max_unwind_s, bool)
-            or not math.isfinite(max_unwind_s)
-            or max_unwind_s <= 0
-        ):
+        if not is_finite_real(max_unwind_s) or max_unwind_s <= 0:
             raise ConfigurationError(
                 f"max_unwind_s must be a finite number of seconds > 0; received {max_unwind_s!r}"
             )

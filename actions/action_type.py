@@ -13,12 +13,14 @@ from pathlib import Path
 from typing import Any
 
 from actions.messages import (
+    BehaviourResult,
     FollowJointTrajectoryFeedback,
     FollowJointTrajectoryGoal,
     FollowJointTrajectoryResult,
     HighFiveFeedback,
     HighFiveGoal,
     HighFiveResult,
+    PhaseFeedback,
     SitFeedback,
     SitGoal,
     SitResult,
@@ -85,27 +87,25 @@ class ActionType:
         return INTERFACES_DIR / f"{self.name}.action"
 
 
-HIGH_FIVE = ActionType(
-    name="HighFive",
-    goal_type=HighFiveGoal,
-    result_type=HighFiveResult,
-    feedback_type=HighFiveFeedback,
-    failure_result=lambda message: HighFiveResult(success=False, message=message),
-)
-STAND = ActionType(
-    name="Stand",
-    goal_type=StandGoal,
-    result_type=StandResult,
-    feedback_type=StandFeedback,
-    failure_result=lambda message: StandResult(success=False, message=message),
-)
-SIT = ActionType(
-    name="Sit",
-    goal_type=SitGoal,
-    result_type=SitResult,
-    feedback_type=SitFeedback,
-    failure_result=lambda message: SitResult(success=False, message=message),
-)
+def _behaviour_action(
+    name: str,
+    goal_type: type,
+    result_type: type[BehaviourResult],
+    feedback_type: type[PhaseFeedback],
+) -> ActionType:
+    """An action with a success/message result and a phase/progress feedback."""
+    return ActionType(
+        name=name,
+        goal_type=goal_type,
+        result_type=result_type,
+        feedback_type=feedback_type,
+        failure_result=lambda message: result_type(success=False, message=message),
+    )
+
+
+HIGH_FIVE = _behaviour_action("HighFive", HighFiveGoal, HighFiveResult, HighFiveFeedback)
+STAND = _behaviour_action("Stand", StandGoal, StandResult, StandFeedback)
+SIT = _behaviour_action("Sit", SitGoal, SitResult, SitFeedback)
 # FollowJointTrajectory has no code for "ended by the framework"; INVALID_GOAL is the closest
 # and the error string says what happened.
 FOLLOW_JOINT_TRAJECTORY = ActionType(

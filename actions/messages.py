@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import numbers
 import typing
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError
 
 _NANOSECONDS_PER_SECOND = 1_000_000_000
@@ -112,11 +112,7 @@ class _SecondsNanoseconds(Message):
         Raises:
             ConfigurationError: ``seconds`` is not a finite real number.
         """
-        if (
-            not isinstance(seconds, numbers.Real)
-            or isinstance(seconds, bool)
-            or not math.isfinite(seconds)
-        ):
+        if not is_finite_real(seconds):
             raise ConfigurationError(
                 f"{cls.__name__}.from_seconds needs a finite number of seconds; "
                 f"received {_describe(seconds)}"
@@ -139,7 +135,7 @@ class _SecondsNanoseconds(Message):
         """
         if isinstance(value, cls):
             return value
-        if isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value):
+        if is_finite_real(value):
             return cls.from_seconds(value)
         raise ConfigurationError(
             f"{where} must be a {cls.__name__} or a finite number of seconds; "

@@ -76,6 +76,12 @@ class Robot:
     def send(self, name: str = "high_five", goal: Any = HF, **kwargs: Any) -> Future[Any]:
         return self.clients[name].send_goal_async(goal, **kwargs)
 
+    def start(self, name: str = "high_five", goal: Any = HF) -> ClientGoalHandle:
+        """Send a goal, tick at t = 0 s and return its handle."""
+        future = self.send(name, goal)
+        self.runner.tick(0.0)
+        return done(future)
+
     def events(self, goal_id: str | None = None) -> list[tuple[float, str, str]]:
         """(now_s, event, detail) of one goal, or (now_s, goal_id, event) of all."""
         log = self.runner.event_log
@@ -290,9 +296,7 @@ def test_rejection_needs_an_int_code_and_a_message() -> None:
 def test_cancel_is_acknowledged_on_the_next_tick_then_unwinds() -> None:
     robot = Robot()
     robot.serve(steps=None, unwind_steps=3)
-    future = robot.send()
-    robot.runner.tick(0.0)
-    handle = done(future)
+    handle = robot.start()
     status_at_reply: list[GoalStatus] = []
     cancel = handle.cancel_goal_async()
     cancel.add_done_callback(lambda f: status_at_reply.append(handle.status))
@@ -319,9 +323,7 @@ def test_cancel_is_acknowledged_on_the_next_tick_then_unwinds() -> None:
 def test_unwind_that_overruns_max_unwind_s_is_aborted() -> None:
     robot = Robot()
     robot.serve(steps=None, unwind_steps=None, max_unwind_s=2.0)
-    future = robot.send()
-    robot.runner.tick(0.0)
-    handle = done(future)
+    handle = robot.start()
     handle.cancel_goal_async()
     for now_s in (1.0, 2.0):
         robot.runner.tick(now_s)
@@ -354,9 +356,7 @@ def test_unwind_that_overruns_max_unwind_s_is_aborted() -> None:
 def test_cancel_callback_can_refuse(cancel_callback: Any, message: str) -> None:
     robot = Robot()
     robot.serve(steps=3, cancel_callback=cancel_callback)
-    future = robot.send()
-    robot.runner.tick(0.0)
-    handle = done(future)
+    handle = robot.start()
     cancel = handle.cancel_goal_async()
     robot.runner.tick(1.0)
     assert done(cancel) == CancelResponse("1", CancelReturnCode.ERROR_REJECTED, message)
@@ -369,9 +369,7 @@ def test_cancel_callback_can_refuse(cancel_callback: Any, message: str) -> None:
 def test_cancel_of_an_ended_goal_and_a_repeated_cancel() -> None:
     robot = Robot()
     robot.serve(steps=None, unwind_steps=2)
-    future = robot.send()
-    robot.runner.tick(0.0)
-    handle = done(future)
+    handle = robot.start()
     first, second = handle.cancel_goal_async(), handle.cancel_goal_async()
     robot.runner.tick(1.0)
     assert done(first).message == "goal 1 (high_five) is canceling"
@@ -511,9 +509,7 @@ def test_behaviour_exception_aborts_the_goal_and_the_runner_goes_on(
     robot = Robot()
     robot.serve("broken", steps=None, fail_in=method)
     robot.serve(steps=1)
-    future = robot.send("broken")
-    robot.runner.tick(0.0)
-    handle = done(future)
+    handle = robot.start("broken")
     if method == "cancel":
         handle.cancel_goal_async()
         robot.runner.tick(1.0)
