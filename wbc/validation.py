@@ -24,7 +24,7 @@ def as_vector(name: str, value: Any, size: int, *, finite: bool = True) -> np.nd
         NonFiniteError: A NaN or infinite entry when ``finite`` is set.
     """
     try:
-        array = np.asarray(value, dtype=np.float64)
+        array = np.array(value, dtype=np.float64)  # a copy: callers keep their own arrays
     except (TypeError, ValueError) as err:
         raise ConfigurationError(
             f"{name}: expected {size} numbers, received {value!r}"
