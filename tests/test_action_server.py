@@ -409,15 +409,14 @@ def test_preempt_policy_unwinds_the_running_goal_and_names_the_preempting_goal()
     robot = Robot(BusyPolicy.PREEMPT)
     robot.serve(steps=None, unwind_steps=2)
     robot.serve("stand", STAND, steps=1)
-    old = robot.send()
-    robot.runner.tick(0.0)
+    old = robot.start()
     new = robot.send("stand", StandGoal())
     robot.runner.tick(1.0)
     assert done(new).status == S.ACCEPTED
-    assert done(old).status == S.CANCELING
+    assert old.status == S.CANCELING
     assert robot.made["high_five"][0].calls[-2] == ("cancel", 1.0, "preempted by goal 2 (stand)")
     robot.runner.tick(2.0)  # the unwind ends: old is over, new still waits for the next tick
-    assert done(done(old).get_result_async()) == WrappedResult(
+    assert done(old.get_result_async()) == WrappedResult(
         "1", S.ABORTED, HighFiveResult(False, "preempted by goal 2 (stand)")
     )
     assert done(new).status == S.ACCEPTED
@@ -469,13 +468,12 @@ def test_a_goal_canceled_by_its_client_stays_canceled_when_preempted_meanwhile()
     robot = Robot(BusyPolicy.PREEMPT)
     robot.serve(steps=None, unwind_steps=2)
     robot.serve("stand", STAND, steps=1)
-    old = robot.send()
-    robot.runner.tick(0.0)
-    done(old).cancel_goal_async()
+    old = robot.start()
+    old.cancel_goal_async()
     robot.runner.tick(1.0)
     new = robot.send("stand", StandGoal())
     robot.runner.tick(2.0)
-    assert done(done(old).get_result_async()).status == S.CANCELED
+    assert done(old.get_result_async()).status == S.CANCELED
     robot.runner.tick(3.0)
     assert done(done(new).get_result_async()).status == S.SUCCEEDED
 
@@ -753,6 +751,17 @@ def test_shutdown_lets_an_executing_behaviour_release_the_robot() -> None:
         ("abort_result", None, "runner shut down at t=2 s while the goal was EXECUTING"),
     ]
     assert done(done(future).get_result_async()).status == S.ABORTED
+
+
+def test_shutdown_when_the_behaviour_cancel_raises_still_ends_the_goal_once() -> None:
+    robot = Robot()
+    robot.serve(steps=None, fail_in="cancel")
+    handle = robot.start()
+    robot.runner.shutdown(1.0)
+    assert done(handle.get_result_async()) == WrappedResult(
+        "1", S.ABORTED, HighFiveResult(False, "behaviour.cancel raised RuntimeError: cancel failed")
+    )
+    assert [e for _, e, _ in robot.events("1")].count("aborted") == 1
 
 
 # --- every legal transition, and replays -----------------------------------------------------
