@@ -70,15 +70,16 @@ class ActionServer:
             raise ConfigurationError(
                 f"action_name must be a non-empty str; received {action_name!r}"
             )
+        if not callable(behaviour_factory):
+            raise ConfigurationError(
+                f"behaviour_factory must be callable; received {behaviour_factory!r}"
+            )
         for label, value in (
-            ("behaviour_factory", behaviour_factory),
             ("goal_callback", goal_callback),
             ("cancel_callback", cancel_callback),
         ):
             if value is not None and not callable(value):
-                raise ConfigurationError(f"{label} must be callable; received {value!r}")
-        if behaviour_factory is None:
-            raise ConfigurationError("behaviour_factory is required; received None")
+                raise ConfigurationError(f"{label} must be callable or None; received {value!r}")
         if not is_finite_real(max_unwind_s) or max_unwind_s <= 0:
             raise ConfigurationError(
                 f"max_unwind_s must be a finite number of seconds > 0; received {max_unwind_s!r}"
