@@ -57,8 +57,12 @@ class ControllerConfig:
     fallback_damping: float = 2.0
 
     def __post_init__(self) -> None:
-        positive = {"control_period_s", "friction_coefficient", "max_normal_force_n",
-                    "torque_limit_fraction", "joint_limit_horizon_s", "support_omega"}
+        as_float("torque_limit_fraction", self.torque_limit_fraction, low=0.0, high=1.0,
+                 low_inclusive=False)
+        as_float("friction_coefficient", self.friction_coefficient, low=0.0, high=5.0,
+                 low_inclusive=False)
+        positive = {"control_period_s", "max_normal_force_n", "joint_limit_horizon_s",
+                    "support_omega"}
         for f in fields(self):
             if f.name == "backend":
                 if not isinstance(self.backend, str) or not self.backend:
@@ -66,10 +70,6 @@ class ControllerConfig:
                 continue
             value = getattr(self, f.name)
             as_float(f.name, value, low=0.0, low_inclusive=f.name not in positive)
-        as_float("torque_limit_fraction", self.torque_limit_fraction, low=0.0, high=1.0,
-                 low_inclusive=False)
-        as_float("friction_coefficient", self.friction_coefficient, low=0.0, high=5.0,
-                 low_inclusive=False)
         if self.min_normal_force_n >= self.max_normal_force_n:
             from wbc.errors import ConfigurationError
 

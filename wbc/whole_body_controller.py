@@ -101,6 +101,8 @@ class WholeBodyController:
         self._q: np.ndarray | None = None
         self.ticks = 0
         self.failures = 0
+        #: The last solved QP's solution ``[qdd (18), forces (12), slack]`` (NaN before any).
+        self.last_solution = np.full(_N, np.nan)
 
     # ------------------------------------------------------------------ references
 
@@ -269,6 +271,7 @@ class WholeBodyController:
         x = result.x
         tau = self.problem.A[_TAU, :_S] @ x[:_S] + self._h_joints
         self._x_prev[:] = x[:_S]
+        self.last_solution = x
         self._tau_prev = tau
         self._tau_good = tau
         t5 = time.perf_counter()
@@ -498,13 +501,18 @@ class WholeBodyController:
         """Name the constraint group that makes the current QP infeasible ('' if none).
 
         Re-solves copies of the problem with one group relaxed at a time (off the hot path,
-        only after a failure); the first group whose relaxation makes it solvable is named.
+        only after a failure), limits before physics; the first group whose relaxation
+        makes it solvable is named.
         """
         from wbc.backends.daqp_backend import DaqpBackend
 
-        groups: list[tuple[str, Any]] = [(name, rows) for name, rows in _GROUPS]
-        groups.append(("normal force bounds", "fz"))
-        groups.append(("joint limits", "joints"))
+        # Limits first: relaxing the physics (dynamics, stance contacts) would make almost
+        # any problem feasible by letting the robot fall, which names nothing useful.
+        groups: list[tuple[str, Any]] = [
+            ("torque limits", _TAU), ("normal force bounds", "fz"), ("friction", _FRIC),
+            ("joint limits", "joints"), ("support polygon", _SUP),
+            ("stance contacts", _CON), ("dynamics", _DYN),
+        ]
         for name, rows in groups:
             trial = self.problem.copy()
             if isinstance(rows, slice):

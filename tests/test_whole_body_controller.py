@@ -1,0 +1,184 @@
+"""The QP controller: constraint satisfaction, physics consistency, failures, bad input."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from tests.conftest import random_configuration
+from wbc import ControllerConfig, WholeBodyController
+from wbc.backends import available_backends
+from wbc.control_output import ControlStatus
+from wbc.description import LEGS
+from wbc.errors import ConfigurationError, NonFiniteError, ReachabilityError, UnknownNameError
+
+
+@pytest.fixture(scope="module")
+def standing(description):
+    return description.pose("standing")
+
+
+@pytest.fixture()
+def controller(standing):
+    c = WholeBodyController()
+    c.reset(standing)
+    return c
+
+
+def perturbed_states(model, standing, n, seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        yield random_configuration(model, rng, scale=0.05, base=standing), 0.2 * rng.normal(size=18)
+
+
+def check_solution(c, q, v, out, swing=()):
+    """Dynamics, contacts, friction, force bounds and torque limits, independently checked."""
+    model, data = c.model, model_data(c)
+    qdd, forces = out.qdd, out.forces
+    pin.computeAllTerms(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    contact_jac = c.contact_task.jacobian  # rolling contact points, checked in test_tasks
+    # Full inverse dynamics: M qdd + h - J^T f = [0 (base); tau (joints)].
+    generalized = pin.rnea(model, data, q, v, qdd) - contact_jac.T @ forces.reshape(-1)
+    np.testing.assert_allclose(generalized[:6], 0.0, atol=1e-6)
+    np.testing.assert_allclose(generalized[6:], out.tau, atol=1e-6)
+    mu = c.config.friction_coefficient
+    for i, leg in enumerate(LEGS):
+        f = forces[i]
+        if leg in swing:
+            np.testing.assert_allclose(f, 0.0, atol=1e-9)
+            continue
+        rows = slice(3 * i, 3 * i + 3)
+        acc = contact_jac[rows] @ qdd + c.contact_task.drift[rows]
+        np.testing.assert_allclose(acc, -c.config.contact_damping * contact_jac[rows] @ v, atol=1e-6)
+        assert abs(f[0]) <= mu * f[2] + 1e-7 and abs(f[1]) <= mu * f[2] + 1e-7
+        assert c.config.min_normal_force_n - 1e-7 <= f[2] <= c.max_normal_force(leg) + 1e-7
+    assert np.all(np.abs(out.tau) <= c.tau_max + 1e-6)
+
+
+def model_data(c):
+    return c.model.createData()
+
+
+def test_one_line_construction_and_defaults():
+    c = WholeBodyController()
+    assert c.config.backend == "daqp"
+    assert c.config.torque_limit_fraction == 0.9
+    np.testing.assert_allclose(c.tau_max, 0.9 * c.description.effort_limit)
+
+
+def test_standing_solution_satisfies_every_constraint(controller, model, standing):
+    for q, v in perturbed_states(model, standing, 10, seed=0):
+        out = controller.step(q, v)
+        assert out.status is ControlStatus.OK, out.message
+        check_solution(controller, q, v, out)
+        eq, ineq = controller.problem.violations(controller.last_solution)
+        assert eq < 1e-7 and ineq < 1e-7
+        assert set(out.timings) == {"model", "tasks", "assembly", "solve", "total"}
+
+
+def test_three_leg_solution_has_zero_swing_force(controller, model, standing):
+    controller.set_max_normal_force("FR", 0.0)
+    controller.set_swing("FR")
+    assert controller.stance_legs == ["FL", "RL", "RR"]
+    for q, v in perturbed_states(model, standing, 5, seed=1):
+        out = controller.step(q, v)
+        assert out.ok, out.message
+        check_solution(controller, q, v, out, swing=("FR",))
+        assert "FR_foot" in out.task_errors
+
+
+def test_weight_is_carried_by_the_feet(controller, standing, description):
+    out = controller.step(standing, np.zeros(18))
+    assert out.forces[:, 2].sum() == pytest.approx(description.total_mass * 9.81, rel=0.02)
+
+
+def test_non_finite_state_falls_back_and_recovers(controller, standing):
+    good = controller.step(standing, np.zeros(18))
+    v = np.zeros(18)
+    v[7] = np.nan
+    out = controller.step(standing, v)
+    assert out.status is ControlStatus.FALLBACK
+    assert out.message == "state: non-finite values at v[7]"
+    assert np.all(np.isfinite(out.tau)) and np.all(np.abs(out.tau) <= controller.tau_max)
+    np.testing.assert_allclose(out.tau, good.tau, atol=1e-9)  # damping of finite v only
+    assert controller.step(standing, np.zeros(18)).ok
+
+
+def test_wrong_state_shape_falls_back(controller, standing):
+    out = controller.step(standing[:18], np.zeros(18))
+    assert out.status is ControlStatus.FALLBACK
+    assert "expected q (19,) and v (18,), received (18,) and (18,)" in out.message
+
+
+def test_infeasible_qp_names_the_group_and_stays_usable(standing):
+    c = WholeBodyController(torque_limit_fraction=0.01)
+    c.reset(standing)
+    out = c.step(standing, np.zeros(18))
+    assert out.status is ControlStatus.FALLBACK
+    assert out.infeasible_group == "torque limits"
+    assert "infeasible constraint group: torque limits" in out.message
+    assert np.all(np.abs(out.tau) <= c.tau_max + 1e-12)
+    assert c.failures == 1
+    assert c.step(standing, np.zeros(18)).status is ControlStatus.FALLBACK  # still consistent
+
+
+def test_fallback_damps_joint_velocity(controller, standing):
+    controller.step(standing, np.zeros(18))
+    good = controller._tau_good.copy()
+    v = np.zeros(18)
+    v[6:] = 1.0
+    q = standing.copy()
+    q[0] = np.inf
+    out = controller.step(q, v)
+    np.testing.assert_allclose(out.tau, np.clip(good - controller.config.fallback_damping,
+                                                 -controller.tau_max, controller.tau_max))
+
+
+def test_unreachable_foot_target_raises_and_keeps_old_target(controller, standing):
+    controller.step(standing, np.zeros(18))
+    old = controller.foot_tasks["FR"].target.copy()
+    with pytest.raises(ReachabilityError, match="reachable: at most 0.40 m"):
+        controller.set_foot_target("FR", [1.0, -0.15, 0.4])
+    np.testing.assert_array_equal(controller.foot_tasks["FR"].target, old)
+    with pytest.raises(NonFiniteError):
+        controller.set_com_target([0.0, np.nan, 0.3])
+
+
+def test_bad_parameters_are_named():
+    with pytest.raises(ConfigurationError, match="unknown parameter\\(s\\) \\['friction'\\]; valid parameters: backend"):
+        WholeBodyController(friction="high")
+    with pytest.raises(ConfigurationError, match="friction_coefficient: expected a value in \\(0, 5\\], received 0"):
+        ControllerConfig(friction_coefficient=0.0)
+    with pytest.raises(ConfigurationError, match="min_normal_force_n: expected less than max_normal_force_n"):
+        ControllerConfig(min_normal_force_n=300.0)
+    with pytest.raises(UnknownNameError, match="unknown backend 'gurobi'; installed backends: daqp"):
+        WholeBodyController(backend="gurobi")
+
+
+def test_contact_changes_are_validated(controller):
+    controller.set_max_normal_force("FR", 0.0)
+    controller.set_swing("FR")
+    with pytest.raises(ConfigurationError, match="at least three feet must stay in stance"):
+        controller.set_swing("FL")
+    with pytest.raises(ConfigurationError, match="FR is in swing; call set_stance"):
+        controller.set_max_normal_force("FR", 10.0)
+    with pytest.raises(ConfigurationError, match="FL max_normal_force_n: expected a value in \\[0, 250\\], received 300"):
+        controller.set_max_normal_force("FL", 300.0)
+    with pytest.raises(UnknownNameError, match="unknown leg 'XX'; valid legs: FL, FR, RL, RR"):
+        controller.set_swing("XX")
+    controller.set_stance("FR")
+    assert controller.stance_legs == list(LEGS)
+
+
+@pytest.mark.parametrize("backend", [b for b in available_backends() if b != "daqp"])
+def test_backends_agree_with_daqp(backend, standing, model):
+    reference = WholeBodyController()
+    other = WholeBodyController(backend=backend)
+    reference.reset(standing)
+    other.reset(standing)
+    for q, v in perturbed_states(model, standing, 3, seed=2):
+        a, b = reference.step(q, v), other.step(q, v)
+        assert a.ok and b.ok, b.message
+        np.testing.assert_allclose(b.tau, a.tau, atol=1e-3)
+        eq, ineq = other.problem.violations(other.last_solution)
+        assert eq < 1e-5 and ineq < 1e-5
