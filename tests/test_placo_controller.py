@@ -1,0 +1,90 @@
+"""PlacoController: the BalanceController protocol, standing in MuJoCo, safe failures."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim.simulator import Go2Simulator
+from wbc.balance_controller import BalanceController
+from wbc.control_output import ControlStatus
+from wbc.errors import ConfigurationError, ReachabilityError
+from wbc.placo_controller import PlacoController
+
+
+@pytest.fixture(scope="module")
+def controller(description) -> PlacoController:
+    return PlacoController(description=description)
+
+
+@pytest.fixture()
+def standing(controller, description):
+    sim = Go2Simulator(description=description)
+    q, _ = sim.state()
+    controller.reset(q)
+    return controller, sim
+
+
+def test_follows_the_balance_controller_protocol(controller):
+    assert isinstance(controller, BalanceController)
+
+
+def test_stands_two_seconds_in_mujoco(standing, description):
+    controller, sim = standing
+    q0, _ = sim.state()
+    statuses = set()
+    for _ in range(2000):
+        q, v = sim.state()
+        out = controller.step(q, v)
+        statuses.add(out.status)
+        sim.step(out.tau)
+    q, _ = sim.state()
+    assert statuses == {ControlStatus.OK}
+    assert np.linalg.norm(q[:3] - q0[:3]) < 5e-3
+    # The four QP forces carry the robot's weight.
+    total = out.forces[:, 2].sum()
+    assert total == pytest.approx(description.total_mass * 9.81, rel=0.02)
+    assert set(out.timings) == {"model", "solve", "total"}
+    eq, ineq = out.violation
+    assert eq < 1e-6 and ineq < 1e-6
+
+
+def test_nan_state_returns_fallback_and_recovers(standing):
+    controller, sim = standing
+    q, v = sim.state()
+    good = controller.step(q, v)
+    bad_q = q.copy()
+    bad_q[9] = np.nan
+    out = controller.step(bad_q, v)
+    assert out.status is ControlStatus.FALLBACK
+    assert out.message == "state: non-finite values at q[9]"
+    assert np.isfinite(out.tau).all()
+    assert np.all(np.abs(out.tau) <= controller.tau_max)
+    np.testing.assert_allclose(out.tau, np.clip(good.tau - 2.0 * v[6:], -controller.tau_max,
+                                                 controller.tau_max))
+    wrong = controller.step(q[:7], v)
+    assert wrong.status is ControlStatus.FALLBACK
+    assert wrong.message.startswith("state: expected q (19,)")
+    assert controller.step(q, v).ok
+
+
+def test_swing_and_stance_switch_the_contact(standing):
+    controller, sim = standing
+    q, v = sim.state()
+    controller.step(q, v)
+    controller.set_max_normal_force("FR", 0.0)
+    assert controller.contacts["FR"].weight_forces == pytest.approx(
+        controller.config.force_weight * 1e6)
+    controller.set_swing("FR")
+    assert controller.stance_legs == ["FL", "RL", "RR"]
+    assert not controller.contacts["FR"].active
+    out = controller.step(q, v)
+    assert out.ok and np.all(out.forces[1] == 0.0) and "FR_foot" in out.task_errors
+    with pytest.raises(ConfigurationError, match="at least three feet must stay in stance"):
+        controller.set_swing("RL")
+    with pytest.raises(ConfigurationError, match="FR is in swing"):
+        controller.set_max_normal_force("FR", 10.0)
+    with pytest.raises(ReachabilityError, match="reachable: at most 0.40 m"):
+        controller.set_foot_target("FR", controller.shoulder_position("FR") + [0.0, 0.0, 0.5])
+    controller.set_stance("FR", max_normal_force_n=0.0)
+    assert controller.contacts["FR"].active and controller.max_normal_force("FR") == 0.0
