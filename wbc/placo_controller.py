@@ -302,7 +302,7 @@ class PlacoController:
         t1 = time.perf_counter()
         try:
             result = self.solver.solve(False)
-        except Exception as err:  # PlaCo raises RuntimeError on inconsistent problems
+        except Exception as err:  # noqa: BLE001 - a solver error must not escape the tick
             return self._fallback(v, f"PlaCo solve raised {type(err).__name__}: {err}", t0)
         t2 = time.perf_counter()
         if not result.success:
