@@ -65,7 +65,8 @@ class LegLift:
     ``controller.step``; :meth:`request_lower` interrupts the lift at any phase and brings
     the robot back to four loaded feet in bounded time. Positions are world-frame [m].
 
-    The foot target is ``forward_m`` in front of the leg's thigh joint (its shoulder) and
+    The foot target is ``forward_m`` in front of the leg's shoulder (see
+    :meth:`WholeBodyController.shoulder_position`) and
     ``lateral_m`` outward, at ``height_m`` above the ground (the foot sphere's centre).
     """
 
@@ -126,7 +127,7 @@ class LegLift:
         if distance > LEG_REACH_M:
             raise ReachabilityError(
                 f"height_m: a foot target at {self.height_m:.3f} m is {distance:.3f} m from the "
-                f"{self.leg} thigh joint, beyond its reach of {LEG_REACH_M:.2f} m; valid heights: "
+                f"{self.leg} shoulder, beyond its reach of {LEG_REACH_M:.2f} m; valid heights: "
                 f"[{MIN_HEIGHT_M:.2f}, {MAX_HEIGHT_M:.2f}] m"
             )
         self.com_home = com0

@@ -89,7 +89,13 @@ class WholeBodyController:
                                                   weight=cfg.foot_weight) for leg in LEGS}
         self.contact_task = ContactTask(self.model, [FOOT_FRAMES[leg] for leg in LEGS],
                                         kd=cfg.contact_damping, radius_m=FOOT_RADIUS_M)
-        self._thigh_joint = {leg: self.model.getJointId(f"{leg}_thigh_joint") for leg in LEGS}
+        standing = self.model.createData()
+        pin.forwardKinematics(self.model, standing, self.description.pose("standing"))
+        self._shoulder_in_base = {
+            leg: standing.oMi[1].actInv(
+                standing.oMi[self.model.getJointId(f"{leg}_thigh_joint")].translation)
+            for leg in LEGS
+        }
         self.support = SupportPolygon(margin_m=cfg.support_margin_m)
 
         self._stance = dict.fromkeys(LEGS, True)
@@ -150,9 +156,13 @@ class WholeBodyController:
         return self.data.oMf[self.contact_task.frame_ids[_LEG_INDEX[leg]]].translation.copy()
 
     def shoulder_position(self, leg: str) -> np.ndarray:
-        """World position [m] of a leg's thigh joint at the last state."""
+        """World position [m] of a leg's shoulder at the last state.
+
+        The shoulder is fixed to the base: where the thigh joint sits in the standing pose
+        (the thigh joint itself swings with the hip's abduction).
+        """
         check_name("leg", leg, LEGS)
-        return self.data.oMi[self._thigh_joint[leg]].translation.copy()
+        return self.data.oMi[1].act(self._shoulder_in_base[leg])
 
     @property
     def full_normal_force_n(self) -> float:
@@ -173,12 +183,12 @@ class WholeBodyController:
         check_name("leg", leg, LEGS)
         position = as_vector(f"{leg}_foot target", position, 3)
         if self._q is not None:
-            shoulder = self.data.oMi[self._thigh_joint[leg]].translation
+            shoulder = self.shoulder_position(leg)
             distance = float(np.linalg.norm(position - shoulder))
             if distance > LEG_REACH_M:
                 raise ReachabilityError(
                     f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
-                    f"the {leg} thigh joint; reachable: at most {LEG_REACH_M:.2f} m"
+                    f"the {leg} shoulder; reachable: at most {LEG_REACH_M:.2f} m"
                 )
         self.foot_tasks[leg].set_target(position, velocity)
         self.foot_tasks[leg].set_feedforward(np.zeros(3) if acceleration is None else acceleration)
