@@ -26,6 +26,9 @@ class BalanceController(Protocol):
     def stance_legs(self) -> list[str]:
         """Legs in stance."""
 
+    def support_legs(self) -> list[str]:
+        """Stance legs that are fully loaded (the support polygon's corners)."""
+
     @property
     def com_target(self) -> np.ndarray:
         """The centre-of-mass target (a copy)."""
@@ -33,6 +36,13 @@ class BalanceController(Protocol):
     @property
     def full_normal_force_n(self) -> float:
         """Normal-force bound of a fully loaded stance foot."""
+
+    @property
+    def posture_target(self) -> np.ndarray:
+        """Joint posture target (a copy)."""
+
+    def set_posture_target(self, joint_positions: np.ndarray) -> None:
+        """Joint posture target (12,), description order."""
 
     def com_position(self) -> np.ndarray:
         """Centre of mass at the last state."""

@@ -240,6 +240,28 @@ class LegLift:
         self._foot_ref = self._from + scale * delta
         self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta, accel * delta)
 
+    @classmethod
+    def put_down(cls, controller: BalanceController, leg: str, ground_point: np.ndarray,
+                 com_home: np.ndarray, now_s: float) -> LegLift:
+        """A lift that only puts a swinging foot down: lower, reload, shift back.
+
+        For a foot left in the air (by a joint trajectory, an aborted goal): it is lowered
+        from where it is to ``ground_point`` [m] and reloaded, and the centre of mass goes
+        to ``com_home`` [m].
+        """
+        lift = cls(controller, leg=leg, height_m=MIN_HEIGHT_M, hold_s=0.0)
+        if leg in controller.stance_legs:
+            raise ConfigurationError(f"leg: {leg} is already in stance; nothing to put down")
+        lift.com_home = np.array(com_home, dtype=float)
+        lift.foot_ground = np.array(ground_point, dtype=float)
+        lift.foot_touch = lift.foot_ground - np.array([0.0, 0.0, lift.touchdown_press_m])
+        lift.foot_target = controller.foot_position(leg)
+        lift._foot_ref = lift.foot_target.copy()
+        lift._com_ref = controller.com_target
+        lift._enter(LiftPhase.HOLDING, now_s, duration=1.0)
+        lift.request_lower(now_s)
+        return lift
+
     # ------------------------------------------------------------------ interruption
 
     def request_lower(self, now_s: float) -> None:

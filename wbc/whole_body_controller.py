@@ -142,6 +142,15 @@ class WholeBodyController:
         self.com_task.set_feedforward(np.zeros(3) if acceleration is None else acceleration)
 
     @property
+    def posture_target(self) -> np.ndarray:
+        """Joint posture target [rad] (12,), description order (a copy)."""
+        return np.array(self.posture_task._require_target(self.posture_task.target))
+
+    def set_posture_target(self, joint_positions: np.ndarray) -> None:
+        """Joint posture target [rad] (12,), description order."""
+        self.posture_task.set_target(joint_positions)
+
+    @property
     def com_target(self) -> np.ndarray:
         """The current centre-of-mass target [m] (a copy)."""
         return np.array(self.com_task._require_target(self.com_task.target))

@@ -1,0 +1,67 @@
+"""What the behaviours of one robot share: the controller, the latest state, its judgement."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wbc.balance_controller import BalanceController
+from wbc.control_output import ControlOutput
+from wbc.support_polygon import SupportPolygon
+
+#: Above this base tilt [deg] the robot is losing its balance.
+TILT_LIMIT_DEG = 12.0
+#: Below this centre-of-mass margin [m] inside the support polygon the robot is losing it.
+MARGIN_LIMIT_M = 0.004
+#: The base is at least this high [m] when standing.
+STANDING_HEIGHT_M = 0.25
+
+
+class RobotContext:
+    """The controller plus the latest measured state, updated by the control loop each tick."""
+
+    def __init__(self, controller: BalanceController):
+        self.controller = controller
+        self.q = np.zeros(19)
+        self.q[6] = 1.0
+        self.v = np.zeros(18)
+        self.now_s = 0.0
+        self.last_output: ControlOutput | None = None
+
+    def observe(self, now_s: float, q: np.ndarray, v: np.ndarray) -> None:
+        """Record the state measured at ``now_s`` [s] (before the behaviours run)."""
+        self.now_s, self.q, self.v = now_s, q, v
+
+    def tilt_deg(self) -> float:
+        """Angle [deg] between the base's vertical axis and the world's."""
+        x, y = self.q[3], self.q[4]
+        return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
+
+    def com_margin_m(self) -> float:
+        """Centre of mass's distance [m] inside the support polygon of the loaded feet."""
+        legs = self.controller.support_legs()
+        if len(legs) < 3:
+            return -math.inf
+        points = np.array([self.controller.foot_position(leg)[:2] for leg in legs])
+        return SupportPolygon.signed_distance(points, self.controller.com_position())
+
+    def is_upright(self) -> bool:
+        """The base is level enough and high enough to stand."""
+        return self.tilt_deg() < TILT_LIMIT_DEG and self.q[2] > 0.08
+
+    def is_standing(self) -> bool:
+        """Four feet in stance, base at standing height and level."""
+        return (len(self.controller.stance_legs) == 4 and self.q[2] > STANDING_HEIGHT_M
+                and self.tilt_deg() < 5.0)
+
+    def balance_problem(self) -> str:
+        """Why the balance is being lost ('' when it is not)."""
+        tilt = self.tilt_deg()
+        if tilt > TILT_LIMIT_DEG:
+            return f"base tilt {tilt:.1f} deg above {TILT_LIMIT_DEG:.0f} deg"
+        margin = self.com_margin_m()
+        if margin < MARGIN_LIMIT_M:
+            return (f"centre of mass {margin * 1e3:.1f} mm from the support edge "
+                    f"(limit {MARGIN_LIMIT_M * 1e3:.0f} mm)")
+        return ""

@@ -1,0 +1,67 @@
+"""The robot as behaviours see it: state in, torques out, joints wired by name.
+
+Sim-to-real: a behaviour never talks to MuJoCo or to a motor driver. It talks to a
+:class:`RobotInterface` in the robot's own joint order (a MuJoCo plant, the Unitree SDK's
+FR, FL, RR, RL order, ...), wrapped in a :class:`MappedRobot` that converts, by joint name,
+to the description order the controller uses. Swapping the simulator for the real robot
+changes the interface object and its names, not the behaviour code.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from wbc.joint_map import JointMap
+from wbc.validation import as_vector
+
+
+@runtime_checkable
+class RobotInterface(Protocol):
+    """A robot in its own joint order."""
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The robot's joints, in the order its arrays use."""
+
+    @property
+    def time_s(self) -> float:
+        """The robot's clock [s] (simulated time for a simulator)."""
+
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q (19,), v (18,))``: Pinocchio-convention base, joints in the robot's order."""
+
+    def write_torques(self, tau: np.ndarray) -> None:
+        """Command joint torques [N m] (12,) in the robot's order, for one control period."""
+
+
+class MappedRobot:
+    """A :class:`RobotInterface` seen in the description's joint order.
+
+    Args:
+        robot: The robot, in its own joint order.
+        aliases: Its joint names mapped to the description's, where they differ.
+    """
+
+    def __init__(self, robot: RobotInterface, *, aliases: dict[str, str] | None = None):
+        self.robot = robot
+        self.joint_map = JointMap(robot.joint_names, aliases=aliases)
+
+    @property
+    def time_s(self) -> float:
+        """The robot's clock [s]."""
+        return self.robot.time_s
+
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)`` with the joints in the description order."""
+        q, v = self.robot.read_state()
+        q = as_vector("q", q, 19, finite=False)
+        v = as_vector("v", v, 18, finite=False)
+        q[7:] = self.joint_map.from_other(q[7:])
+        v[6:] = self.joint_map.from_other(v[6:])
+        return q, v
+
+    def write_torques(self, tau: np.ndarray) -> None:
+        """Torques [N m] in the description order, sent in the robot's order."""
+        self.robot.write_torques(self.joint_map.to_other(tau))

@@ -1,0 +1,47 @@
+"""A MuJoCo GO2 plant behind the :class:`actions.RobotInterface`, in its actuators' order."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sim.simulator import Go2Simulator
+
+
+class MujocoRobot:
+    """The simulated robot as a real one would present itself: its own joint order.
+
+    Its joint order is the plant's actuator order (the Unitree SDK's FR, FL, RR, RL when the
+    plant is built that way); :class:`actions.MappedRobot` wires it to the description by
+    name. Writing torques advances the simulation by one control period.
+
+    Args:
+        sim: The plant.
+        control_period_s: Simulated time [s] one torque command lasts (a multiple of the
+            physics timestep).
+    """
+
+    def __init__(self, sim: Go2Simulator, *, control_period_s: float = 1e-3):
+        self.sim = sim
+        self.substeps = max(1, int(round(control_period_s / sim.timestep_s)))
+        self._order = sim.actuator_map.index  # actuator i drives description joint index[i]
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Joint names in actuator order."""
+        return self.sim.actuator_map.other_names
+
+    @property
+    def time_s(self) -> float:
+        """Simulated time [s]."""
+        return self.sim.time_s
+
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)``, Pinocchio convention, joints in actuator order."""
+        q, v = self.sim.state()
+        q[7:] = q[7:][self._order]
+        v[6:] = v[6:][self._order]
+        return q, v
+
+    def write_torques(self, tau: np.ndarray) -> None:
+        """Torques [N m] in actuator order; advances one control period."""
+        self.sim.step_actuators(tau, self.substeps)
