@@ -6,11 +6,16 @@ import numpy as np
 import pinocchio as pin
 
 from tasks.task import Task
+from wbc.errors import ConfigurationError
 from wbc.validation import as_vector
 
 
 class PostureTask(Task):
-    """Track joint positions [rad] of the ``n_joints`` actuated joints (after the free flyer)."""
+    """Track joint positions [rad] of the ``n_joints`` actuated joints (after the free flyer).
+
+    Besides the scalar ``weight``, each joint has a relative weight in ``joint_weights``
+    (ones by default): a joint trajectory raises a few joints' weights to track them tightly.
+    """
 
     def __init__(self, *, n_joints: int = 12, kp: float = 25.0, kd: float | None = None,
                  weight: float = 0.05):
@@ -18,12 +23,25 @@ class PostureTask(Task):
         super().__init__(kp=kp, kd=kd, weight=weight, nv=6 + n_joints)
         self.jacobian[:, 6:] = np.eye(n_joints)
         self.target: np.ndarray | None = None
+        self.target_velocity = np.zeros(n_joints)
+        self.joint_weights = np.ones(n_joints)
 
-    def set_target(self, joint_positions: np.ndarray) -> None:
-        """Set the target joint positions [rad] (n_joints,), description order; copies them."""
-        self.target = as_vector("PostureTask.target", joint_positions, self.dim)
+    def set_target(self, joint_positions: np.ndarray, velocity: np.ndarray | None = None) -> None:
+        """Set the target joint positions [rad] and velocities [rad/s]; copies them."""
+        target = as_vector("PostureTask.target", joint_positions, self.dim)
+        velocity = np.zeros(self.dim) if velocity is None else as_vector(
+            "PostureTask.target_velocity", velocity, self.dim)
+        self.target, self.target_velocity = target, velocity
+
+    def set_joint_weights(self, weights: np.ndarray) -> None:
+        """Relative weights (n_joints,), each >= 0, multiplying ``weight`` joint by joint."""
+        weights = as_vector("PostureTask.joint_weights", weights, self.dim)
+        if np.any(weights < 0.0):
+            raise ConfigurationError(
+                f"PostureTask.joint_weights: expected values >= 0, received {weights.tolist()}")
+        self.joint_weights = weights
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
         target = self._require_target(self.target)
         np.subtract(target, q[7:], out=self.error)
-        np.negative(v[6:], out=self.error_rate)
+        np.subtract(self.target_velocity, v[6:], out=self.error_rate)

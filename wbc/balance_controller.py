@@ -41,8 +41,16 @@ class BalanceController(Protocol):
     def posture_target(self) -> np.ndarray:
         """Joint posture target (a copy)."""
 
-    def set_posture_target(self, joint_positions: np.ndarray) -> None:
+    def set_posture_target(self, joint_positions: np.ndarray,
+                           velocity: np.ndarray | None = None,
+                           acceleration: np.ndarray | None = None) -> None:
         """Joint posture target (12,), description order."""
+
+    def set_posture_weights(self, weights: np.ndarray) -> None:
+        """Per-joint multipliers of the posture weight."""
+
+    def set_foot_weight(self, leg: str, weight: float) -> None:
+        """Weight of a swing foot's position task."""
 
     def com_position(self) -> np.ndarray:
         """Centre of mass at the last state."""

@@ -73,7 +73,8 @@ class LegLift:
     def __init__(self, controller: BalanceController, *, leg: str = "FR",
                  height_m: float = 0.40, hold_s: float = 2.0, forward_m: float = 0.20,
                  lateral_m: float = 0.0, shift_margin_m: float = 0.04,
-                 touchdown_press_m: float = 0.001, timing: LegLiftTiming | None = None):
+                 touchdown_press_m: float = 0.001, timing: LegLiftTiming | None = None,
+                 release_only: bool = False):
         """Args:
             controller: The whole-body controller whose references this drives.
             leg: The leg to raise (``FL``, ``FR``, ``RL`` or ``RR``).
@@ -85,7 +86,11 @@ class LegLift:
             touchdown_press_m: How far below its old ground point the foot is aimed [m], so
                 that it surely touches before it is reloaded.
             timing: Phase durations.
+            release_only: Stop once the foot is released (after unloading): the lift ends
+                DONE with the leg in swing, its foot held where it was, for another motion
+                (a joint trajectory) to take the leg over.
         """
+        self.release_only = release_only
         self.controller = controller
         self.leg = check_name("leg", leg, LEGS)
         self.height_m = as_float("height_m", height_m, low=MIN_HEIGHT_M, high=MAX_HEIGHT_M)
@@ -150,6 +155,8 @@ class LegLift:
     def nominal_duration_s(self) -> float:
         """Duration [s] of the whole lift when not interrupted."""
         t = self.timing
+        if self.release_only:
+            return t.shift_s + t.unload_s
         return (t.shift_s + t.unload_s + t.raise_s + self.hold_s + t.lower_s + t.reload_s
                 + t.shift_back_s)
 
@@ -175,7 +182,11 @@ class LegLift:
             ctrl.set_max_normal_force(self.leg, self._fmax_from * (1.0 - s))
             if done:
                 ctrl.set_swing(self.leg)
-                self._start_foot_motion(now_s, LiftPhase.RAISING, self.foot_target, t.raise_s)
+                if self.release_only:
+                    self._enter(LiftPhase.DONE, now_s, duration=0.0)
+                else:
+                    self._start_foot_motion(now_s, LiftPhase.RAISING, self.foot_target,
+                                            t.raise_s)
         elif phase in (LiftPhase.RAISING, LiftPhase.LOWERING):
             self._track_foot(elapsed, lead_z=phase is LiftPhase.RAISING)
             if done and phase is LiftPhase.RAISING:

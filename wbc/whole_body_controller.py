@@ -129,6 +129,8 @@ class WholeBodyController:
         for leg in LEGS:
             self._stance[leg] = True
             self._max_force[leg] = self.config.max_normal_force_n
+            self.foot_tasks[leg].set_weight(self.config.foot_weight)
+        self.posture_task.set_joint_weights(np.ones(_NJ))
         self._contacts_changed()
         gravity = pin.computeGeneralizedGravity(self.model, self.data, q)
         self._tau_prev = self._static_torques(q, gravity)
@@ -146,9 +148,21 @@ class WholeBodyController:
         """Joint posture target [rad] (12,), description order (a copy)."""
         return np.array(self.posture_task._require_target(self.posture_task.target))
 
-    def set_posture_target(self, joint_positions: np.ndarray) -> None:
-        """Joint posture target [rad] (12,), description order."""
-        self.posture_task.set_target(joint_positions)
+    def set_posture_target(self, joint_positions: np.ndarray,
+                           velocity: np.ndarray | None = None,
+                           acceleration: np.ndarray | None = None) -> None:
+        """Joint posture target [rad], velocity [rad/s] and feed-forward [rad/s^2] (12,)."""
+        self.posture_task.set_target(joint_positions, velocity)
+        self.posture_task.set_feedforward(np.zeros(_NJ) if acceleration is None else acceleration)
+
+    def set_posture_weights(self, weights: np.ndarray) -> None:
+        """Per-joint multipliers (12,) of the posture weight; ones restore the default."""
+        self.posture_task.set_joint_weights(weights)
+
+    def set_foot_weight(self, leg: str, weight: float) -> None:
+        """Weight of a swing foot's position task (0 hands the leg to the posture task)."""
+        check_name("leg", leg, LEGS)
+        self.foot_tasks[leg].set_weight(weight)
 
     @property
     def com_target(self) -> np.ndarray:
@@ -418,7 +432,8 @@ class WholeBodyController:
         H, f = p.H, p.f
         H[:] = self._h_const
         d = self._diag
-        wo, wp = self.base_task.weight, self.posture_task.weight
+        wo = self.base_task.weight
+        wp = self.posture_task.weight * self.posture_task.joint_weights
         H[d[3:6], d[3:6]] += wo
         H[d[6:_NV], d[6:_NV]] += wp
         com = self.com_task
