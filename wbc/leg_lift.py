@@ -278,8 +278,8 @@ class LegLift:
     def request_lower(self, now_s: float) -> None:
         """Interrupt: put the foot down and return to four loaded feet, from any phase.
 
-        The unwind takes at most ``lower_s + unwind_reload_s`` seconds (less when the foot is
-        low): lowering at ``unwind_speed_mps``, then reloading while shifting back.
+        The foot is lowered at ``unwind_speed_mps`` (at most ``lower_s``), then reloaded in
+        ``unwind_reload_s`` while the centre of mass shifts back in ``unwind_shift_s``.
         """
         if self.phase is None or self.interrupted or self.phase is LiftPhase.DONE:
             self.interrupted = True
@@ -291,18 +291,16 @@ class LegLift:
         if self.phase is LiftPhase.SHIFTING:
             self._from, self._to = self._com_ref.copy(), self.com_home
             self._enter(LiftPhase.SHIFTING_BACK, now_s, duration=t.unwind_shift_s)
-        elif self.phase is LiftPhase.UNLOADING:
-            fmax = ctrl.max_normal_force(self.leg)
-            full = ctrl.full_normal_force_n
-            # Continue the reload ramp from the current bound.
-            s0 = fmax / full
+        elif self.phase in (LiftPhase.UNLOADING, LiftPhase.RELOADING):
+            # Reload from the current bound at the unwind pace, shifting back meanwhile.
+            s0 = ctrl.max_normal_force(self.leg) / ctrl.full_normal_force_n
             self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * t.unwind_reload_s,
                         duration=t.unwind_reload_s)
             self._from, self._to = self._com_ref.copy(), self.com_home
             self._shift_t0 = now_s
-        elif self.phase in (LiftPhase.RAISING, LiftPhase.HOLDING):
+        elif self.phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
             self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
-        # LOWERING, RELOADING and SHIFTING_BACK already lead back to four feet.
+        # SHIFTING_BACK already has four loaded feet and ends within shift_back_s.
 
     @staticmethod
     def _inverse_ramp(s: float) -> float:
