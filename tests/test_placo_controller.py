@@ -88,3 +88,25 @@ def test_swing_and_stance_switch_the_contact(standing):
         controller.set_foot_target("FR", controller.shoulder_position("FR") + [0.0, 0.0, 0.5])
     controller.set_stance("FR", max_normal_force_n=0.0)
     assert controller.contacts["FR"].active and controller.max_normal_force("FR") == 0.0
+    assert controller.support_legs() == ["FL", "RL", "RR"]
+
+
+def test_posture_and_foot_weights(standing):
+    controller, sim = standing
+    q, v = sim.state()
+    np.testing.assert_allclose(controller.posture_target, q[7:])
+    target = q[7:] + 0.05
+    controller.set_posture_target(target, velocity=np.full(12, 0.1))
+    np.testing.assert_allclose(controller.posture_target, target)
+    assert controller.posture_tasks[3].get_joint("FR_hip_joint") == pytest.approx(target[3])
+    with pytest.raises(ConfigurationError, match="expected values >= 0"):
+        controller.set_posture_weights(np.full(12, -1.0))
+    controller.set_swing("FR")
+    controller.set_foot_weight("FR", 0.0)
+    out = controller.step(q, v)
+    assert out.ok
+    with pytest.raises(ConfigurationError, match="FR foot weight"):
+        controller.set_foot_weight("FR", -1.0)
+    controller.reset(q)
+    assert controller.stance_legs == ["FL", "FR", "RL", "RR"]
+    np.testing.assert_allclose(controller.posture_target, q[7:])

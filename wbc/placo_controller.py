@@ -37,12 +37,15 @@ class PlacoController:
     - CoM: ``add_com_task``, soft, ``com_weight``, ``kp = com_kp``, critical damping.
     - Base orientation: ``add_orientation_task("base")``, soft, ``base_orientation_weight``,
       ``base_orientation_kp``; the target keeps the reset yaw with zero roll and pitch.
-    - Posture: ``add_joints_task``, soft, ``posture_weight``, ``posture_kp``.
+    - Posture: one ``add_joints_task`` per joint (PlaCo's joints task has a single weight;
+      ours has per-joint multipliers), soft, ``posture_weight`` times the joint's multiplier,
+      ``posture_kp``. Twelve tasks instead of one cost PlaCo about 20 us a tick.
     - One position task per foot (``FL_foot`` ...). A stance foot's task is *hard* with
       ``kp = 0``, ``kd = contact_damping`` (the foot does not accelerate, residual velocity
       is damped) and carries a unilateral point contact (``mu = friction_coefficient``,
       force regularised by ``weight_forces = force_weight``). A swing foot's contact is
-      deactivated and its task becomes soft, ``foot_weight``, ``foot_kp``.
+      deactivated and its task becomes soft, ``foot_weight`` (or :meth:`set_foot_weight`'s),
+      ``foot_kp``.
     - Torque limits: ``torque_limit_fraction`` of the URDF efforts via ``set_torque_limit``.
     - Joint position and velocity limits: PlaCo's own (``enable_joint_limits``,
       ``enable_velocity_limits``) with ``dt = joint_limit_horizon_s``: the velocity rows
@@ -112,11 +115,20 @@ class PlacoController:
         self.com_task.configure("com", "soft", cfg.com_weight)
         self.base_task = solver.add_orientation_task("base", np.eye(3))
         self.base_task.configure("base_orientation", "soft", cfg.base_orientation_weight)
-        self.posture_task = solver.add_joints_task()
-        self.posture_task.configure("posture", "soft", cfg.posture_weight)
+        # One joints task per joint: PlaCo's joints task has one weight, ours per-joint ones.
+        self.posture_tasks = [solver.add_joints_task() for _ in JOINT_NAMES]
         for task, kp in ((self.com_task, cfg.com_kp), (self.base_task, cfg.base_orientation_kp),
-                         (self.posture_task, cfg.posture_kp)):
+                         *((t, cfg.posture_kp) for t in self.posture_tasks)):
             task.kp, task.kd = kp, 2.0 * math.sqrt(kp)
+        self._posture = np.zeros(_NJ)
+        self.set_posture_weights(np.ones(_NJ))
+        # The shoulder is fixed to the base: the thigh joint's place in the standing pose.
+        robot.state.q = self.description.pose("standing")
+        robot.update_kinematics()
+        T_base_world = np.linalg.inv(robot.get_T_world_frame("base"))
+        self._shoulder_in_base = {
+            leg: (T_base_world @ robot.get_T_world_frame(f"{leg}_thigh_joint"))[:3, 3]
+            for leg in LEGS}
         self.foot_tasks = {}
         self.contacts = {}
         for leg in LEGS:
@@ -127,6 +139,7 @@ class PlacoController:
             self.foot_tasks[leg], self.contacts[leg] = task, contact
         self._stance = dict.fromkeys(LEGS, True)
         self._max_force = dict.fromkeys(LEGS, cfg.max_normal_force_n)
+        self._foot_weight = dict.fromkeys(LEGS, cfg.foot_weight)
         for leg in LEGS:
             self._configure_foot(leg)
         self._tau_good = np.zeros(_NJ)
@@ -148,11 +161,13 @@ class PlacoController:
         self.set_com_target(robot.com_world())
         yaw = pin.rpy.matrixToRpy(robot.get_T_world_frame("base")[:3, :3])[2]
         self.base_task.R_world_frame = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
-        self.posture_task.set_joints(dict(zip(JOINT_NAMES, q[7:].tolist())))
+        self.set_posture_target(q[7:])
+        self.set_posture_weights(np.ones(_NJ))
         for leg in LEGS:
             self.set_foot_target(leg, self.foot_position(leg))
             self._stance[leg] = True
             self._max_force[leg] = self.config.max_normal_force_n
+            self._foot_weight[leg] = self.config.foot_weight
             self._configure_foot(leg)
         result = self.solver.solve(False)
         self._tau_good = (np.array(result.tau[6:]) if result.success
@@ -164,6 +179,38 @@ class PlacoController:
         self.com_task.target_world = as_vector("com target", position, 3)
         self.com_task.dtarget_world = _vector_or_zero("com velocity", velocity)
         self.com_task.ddtarget_world = _vector_or_zero("com acceleration", acceleration)
+
+    @property
+    def posture_target(self) -> np.ndarray:
+        """Joint posture target [rad] (12,), description order (a copy)."""
+        return self._posture.copy()
+
+    def set_posture_target(self, joint_positions: np.ndarray,
+                           velocity: np.ndarray | None = None,
+                           acceleration: np.ndarray | None = None) -> None:
+        """Joint posture target [rad], velocity [rad/s] and feed-forward [rad/s^2] (12,)."""
+        target = as_vector("posture target", joint_positions, _NJ)
+        rate = np.zeros(_NJ) if velocity is None else as_vector("posture velocity", velocity, _NJ)
+        accel = (np.zeros(_NJ) if acceleration is None
+                 else as_vector("posture acceleration", acceleration, _NJ))
+        for task, name, *values in zip(self.posture_tasks, JOINT_NAMES, target, rate, accel):
+            task.set_joint(name, *map(float, values))
+        self._posture = target
+
+    def set_posture_weights(self, weights: np.ndarray) -> None:
+        """Per-joint multipliers (12,) of the posture weight; ones restore the default."""
+        weights = as_vector("posture weights", weights, _NJ)
+        if np.any(weights < 0.0):
+            raise ConfigurationError(
+                f"posture weights: expected values >= 0, received {weights.tolist()}")
+        for task, name, weight in zip(self.posture_tasks, JOINT_NAMES, weights):
+            task.configure(f"posture {name}", "soft", self.config.posture_weight * float(weight))
+
+    def set_foot_weight(self, leg: str, weight: float) -> None:
+        """Weight of a swing foot's position task (0 hands the leg to the posture task)."""
+        check_name("leg", leg, LEGS)
+        self._foot_weight[leg] = as_float(f"{leg} foot weight", weight, low=0.0)
+        self._configure_foot(leg)
 
     @property
     def com_target(self) -> np.ndarray:
@@ -180,9 +227,10 @@ class PlacoController:
         return self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3].copy()
 
     def shoulder_position(self, leg: str) -> np.ndarray:
-        """World position [m] of a leg's thigh joint at the last state."""
+        """World position [m] of a leg's shoulder (base-fixed, see the class) at the last state."""
         check_name("leg", leg, LEGS)
-        return self.robot.get_T_world_frame(f"{leg}_thigh_joint")[:3, 3].copy()
+        T_world_base = self.robot.get_T_world_frame("base")
+        return T_world_base[:3, :3] @ self._shoulder_in_base[leg] + T_world_base[:3, 3]
 
     @property
     def full_normal_force_n(self) -> float:
@@ -198,7 +246,7 @@ class PlacoController:
 
         Raises:
             ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
-                thigh joint at the last state; the target is left unchanged.
+                shoulder at the last state; the target is left unchanged.
         """
         check_name("leg", leg, LEGS)
         position = as_vector(f"{leg}_foot target", position, 3)
@@ -207,7 +255,7 @@ class PlacoController:
             if distance > LEG_REACH_M:
                 raise ReachabilityError(
                     f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
-                    f"the {leg} thigh joint; reachable: at most {LEG_REACH_M:.2f} m"
+                    f"the {leg} shoulder; reachable: at most {LEG_REACH_M:.2f} m"
                 )
         task = self.foot_tasks[leg]
         task.target_world = position
@@ -254,6 +302,11 @@ class PlacoController:
         """Legs currently in stance."""
         return [leg for leg in LEGS if self._stance[leg]]
 
+    def support_legs(self) -> list[str]:
+        """Stance legs that are fully loaded: the corners of the support polygon."""
+        full = self.config.max_normal_force_n
+        return [leg for leg in LEGS if self._stance[leg] and self._max_force[leg] >= full]
+
     def max_normal_force(self, leg: str) -> float:
         """Current normal-force bound [N] of a foot."""
         check_name("leg", leg, LEGS)
@@ -273,7 +326,7 @@ class PlacoController:
             contact.weight_forces = cfg.force_weight / (ratio * ratio)
             contact.active = True
         else:
-            task.configure(f"{leg}_foot", "soft", cfg.foot_weight)
+            task.configure(f"{leg}_foot", "soft", self._foot_weight[leg])
             task.kp, task.kd = cfg.foot_kp, 2.0 * math.sqrt(cfg.foot_kp)
             contact.active = False
 
@@ -348,9 +401,10 @@ class PlacoController:
         return eq, ineq
 
     def _task_errors(self) -> dict[str, float]:
+        posture = [float(np.asarray(task.error).reshape(-1)[0]) for task in self.posture_tasks]
         errors = {"com": float(np.linalg.norm(self.com_task.error)),
                   "base_orientation": float(np.linalg.norm(self.base_task.error)),
-                  "posture": float(np.linalg.norm(self.posture_task.error))}
+                  "posture": float(np.linalg.norm(posture))}
         for leg in LEGS:
             if not self._stance[leg]:
                 errors[f"{leg}_foot"] = float(np.linalg.norm(self.foot_tasks[leg].error))
