@@ -1,0 +1,540 @@
+"""Per-tick QP timing of every backend and of PlaCo on a closed-loop high five in MuJoCo.
+
+Run ``python -m benchmarks.qp_timing [--quick] [--json PATH] [--plot PATH]``.
+
+Three tables, all measured through the library's public API:
+
+1. Backends: one closed-loop episode per backend (200 standing warm-up ticks, excluded from
+   the statistics, then a ``LegLift`` of leg FR to 0.40 m at 1 kHz torque control). Each
+   tick's ``ControlOutput.timings`` give the stage times; the returned QP solution is
+   checked against the problem it solved. The full mode runs the whole lift with a 2 s
+   hold; ``--quick`` shifts in 0.5 s, unloads in 0.3 s and stops after 1.0 s of the lift
+   (the first 0.2 s of the raise), so that the one-shot OSQP (~4 ms a tick) stays short.
+2. Scaling: tick time against the number of contacts (four feet standing; three with the
+   foot held up) and with the swing-foot task's weight set to zero, for the default
+   backend and PlaCo (reaching the hold with faster phases: only the hold is timed).
+3. Episode quality of the default backend over a whole lift (hold 2 s, or 0.3 s in quick
+   mode): tracking, slip, forces, margins, torques, failures, real-time factor.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.metadata
+import json
+import os
+import platform
+import sys
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from sim.simulator import Go2Simulator
+from wbc import (
+    LEGS,
+    BalanceController,
+    ControllerConfig,
+    LegLift,
+    LegLiftTiming,
+    LiftPhase,
+    PlacoController,
+    SupportPolygon,
+    WholeBodyController,
+    available_backends,
+)
+from wbc.backends import missing_backends
+
+LEG, HEIGHT_M = "FR", 0.40
+WARMUP_TICKS = 200
+STAGES = ("model", "tasks", "assembly", "solve", "total")
+PLACO = "placo"
+DEFAULT = "default"
+#: Quick timing episodes: a faster shift and unload, stopped after this much lift time [s].
+QUICK_LIFT_S = 1.0
+#: Durations are off the 1 ms tick grid: a tick landing a rounding error short of a phase's
+#: end makes LegLift's ramp overshoot and ask for a -1e-13 N force bound (a ValueError).
+QUICK_TIMING = LegLiftTiming(shift_s=0.5005, unload_s=0.3005)
+#: The scaling runs only need to reach the hold: they get there faster.
+SCALING_TIMING = LegLiftTiming(shift_s=0.5005, unload_s=0.3005, raise_s=0.8005)
+#: A foot counts in the measured support polygon above this MuJoCo normal force [N].
+LOADED_N = 1.0
+#: The CoM margin is sampled every this many ticks (a polygon per tick costs ~0.1 ms).
+MARGIN_EVERY = 5
+PACKAGES = ("pin", "placo", "mujoco", "daqp", "osqp", "qpsolvers", "numpy", "proxsuite", "piqp",
+            "quadprog")
+
+
+@dataclass
+class Episode:
+    """What one closed-loop run recorded (timed ticks only in ``timings``)."""
+
+    timings: dict[str, list[float]] = field(default_factory=lambda: {s: [] for s in STAGES})
+    violations: list[tuple[float, float]] = field(default_factory=list)
+    failures: int = 0
+    ticks: int = 0
+    sim_s: float = 0.0
+    control_wall_s: float = 0.0
+    metrics: dict[str, float] = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------------------- measuring
+
+
+def solution_violations(controller: BalanceController, out: Any) -> tuple[float, float] | None:
+    """Largest equality and inequality violation of the QP solution behind ``out``.
+
+    :class:`WholeBodyController`: its ``last_solution`` checked against its ``problem``
+    (call right after ``step``, before the references change); PlaCo's controller reports
+    its own in ``out.violation``. ``None`` for a fallback tick.
+    """
+    if not out.ok:
+        return None
+    if isinstance(controller, WholeBodyController):
+        return controller.problem.violations(controller.last_solution)
+    return tuple(out.violation)
+
+
+def _record(episode: Episode, controller: BalanceController, out: Any) -> None:
+    episode.ticks += 1
+    for stage in STAGES:
+        episode.timings[stage].append(out.timings.get(stage, np.nan))
+    if not out.ok:
+        episode.failures += 1
+    violation = solution_violations(controller, out)
+    if violation is not None:
+        episode.violations.append(violation)
+
+
+class _Quality:
+    """Accumulates the episode-table metrics tick by tick (MuJoCo-measured where possible)."""
+
+    def __init__(self, sim: Go2Simulator, controller: BalanceController):
+        self.sim, self.controller = sim, controller
+        self.stance = [leg for leg in LEGS if leg != LEG]
+        feet = sim.foot_positions()
+        self.ground = {leg: feet[leg][:2].copy() for leg in self.stance}
+        self.slide = {leg: np.zeros(2) for leg in self.stance}
+        self.errors: list[tuple[str, float]] = []
+        self.min_force = np.inf
+        self.min_margin = np.inf
+        self.max_tilt = 0.0
+        self.max_fraction = 0.0
+        self.max_jump = 0.0
+        self.travel = 0.0
+        self.max_slide = 0.0
+        self.limit = sim.description.effort_limit
+        self.tau_prev: np.ndarray | None = None
+        self.ticks = 0
+
+    def update(self, phase: LiftPhase, q: np.ndarray, tau: np.ndarray) -> None:
+        """Account one tick: ``q`` is the state the controller saw, ``tau`` its command."""
+        sim, dt = self.sim, self.sim.timestep_s
+        self.ticks += 1
+        feet, forces = sim.foot_positions(), sim.foot_contact_forces()
+        sliding = sim.foot_sliding_velocities()
+        for leg in self.stance:
+            self.slide[leg] += sliding[leg] * dt
+            self.max_slide = max(self.max_slide, float(np.linalg.norm(self.slide[leg])))
+            self.travel = max(self.travel, float(np.linalg.norm(feet[leg][:2] - self.ground[leg])))
+            self.min_force = min(self.min_force, float(forces[leg][2]))
+        if phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
+            target = _foot_target(self.controller, LEG)
+            self.errors.append((phase.value, float(np.linalg.norm(feet[LEG] - target))))
+        if self.ticks % MARGIN_EVERY == 0:
+            loaded = [feet[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_N]
+            com = self.controller.com_position()
+            margin = (SupportPolygon.signed_distance(np.array(loaded), com)
+                      if len(loaded) >= 3 else -np.inf)
+            self.min_margin = min(self.min_margin, margin)
+        rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+        self.max_tilt = max(self.max_tilt, float(np.arccos(np.clip(rotation[2, 2], -1.0, 1.0))))
+        self.max_fraction = max(self.max_fraction, float(np.max(np.abs(tau) / self.limit)))
+        if self.tau_prev is not None:
+            self.max_jump = max(self.max_jump, float(np.max(np.abs(tau - self.tau_prev))))
+        self.tau_prev = np.array(tau, dtype=float)
+
+    def summary(self) -> dict[str, float]:
+        errors = np.array([e for _, e in self.errors]) if self.errors else np.full(1, np.nan)
+        hold = np.array([e for p, e in self.errors if p == LiftPhase.HOLDING.value] or [np.nan])
+        return {
+            "foot_tracking_rms_mm": 1e3 * float(np.sqrt(np.mean(errors ** 2))),
+            "foot_tracking_max_mm": 1e3 * float(np.max(errors)),
+            "foot_hold_rms_mm": 1e3 * float(np.sqrt(np.mean(hold ** 2))),
+            "foot_hold_max_mm": 1e3 * float(np.max(hold)),
+            "stance_sliding_max_mm": 1e3 * self.max_slide,
+            "stance_foot_travel_max_mm": 1e3 * self.travel,
+            "min_stance_normal_force_n": self.min_force,
+            "min_com_margin_mm": 1e3 * self.min_margin,
+            "max_base_tilt_deg": float(np.degrees(self.max_tilt)),
+            "max_torque_fraction": self.max_fraction,
+            "max_torque_jump_nm": self.max_jump,
+        }
+
+
+def _foot_target(controller: BalanceController, leg: str) -> np.ndarray:
+    """The controller's current swing-foot target (the protocol has no getter for it)."""
+    task = controller.foot_tasks[leg]  # type: ignore[attr-defined]
+    target = task.target if isinstance(controller, WholeBodyController) else task.target_world
+    return np.asarray(target, dtype=float).reshape(3)
+
+
+def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: float | None,
+                timing: LegLiftTiming | None = None, quality: bool = False) -> Episode:
+    """Warm up standing, then lift FR to 0.40 m in closed loop; record every lift tick.
+
+    Args:
+        controller: A fresh controller.
+        hold_s: Hold time of the lift [s].
+        stop_after_s: Stop after this much lift time [s] (``None``: run the whole lift).
+        timing: The lift's phase durations (LegLift's defaults when ``None``).
+        quality: Also collect the episode-table metrics (adds MuJoCo queries per tick,
+            excluded from the real-time factor).
+    """
+    sim = Go2Simulator()
+    episode = Episode()
+    wall = time.perf_counter()
+    q, v = sim.state()
+    controller.reset(q)
+    for _ in range(WARMUP_TICKS):
+        q, v = sim.state()
+        sim.step(controller.step(q, v).tau)
+    episode.control_wall_s += time.perf_counter() - wall
+    lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
+    lift.start(sim.time_s)
+    start = sim.time_s
+    meter = _Quality(sim, controller) if quality else None
+    while lift.phase is not LiftPhase.DONE:
+        if stop_after_s is not None and sim.time_s - start >= stop_after_s - 1e-9:
+            break
+        wall = time.perf_counter()
+        phase = lift.update(sim.time_s)
+        q, v = sim.state()
+        out = controller.step(q, v)
+        sim.step(out.tau)
+        episode.control_wall_s += time.perf_counter() - wall
+        _record(episode, controller, out)
+        if meter is not None:
+            meter.update(phase, q, out.tau)
+    episode.sim_s = sim.time_s
+    if meter is not None:
+        episode.metrics = meter.summary()
+        episode.metrics["qp_failures"] = episode.failures
+        episode.metrics["real_time_factor"] = episode.sim_s / episode.control_wall_s
+        episode.metrics["lift_completed"] = lift.phase is LiftPhase.DONE
+    return episode
+
+
+def _stats_us(samples: Sequence[float]) -> dict[str, float | None]:
+    values = np.asarray(samples, dtype=float)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return {"median": None, "p90": None, "p99": None, "max": None}
+    return {"median": 1e6 * float(np.median(values)), "p90": 1e6 * float(np.percentile(values, 90)),
+            "p99": 1e6 * float(np.percentile(values, 99)), "max": 1e6 * float(values.max())}
+
+
+def backend_row(name: str, episode: Episode) -> dict[str, Any]:
+    """One row of the backend table from an episode."""
+    violations = np.array(episode.violations) if episode.violations else np.full((1, 2), np.nan)
+    total = _stats_us(episode.timings["total"])
+    stages = {s: _stats_us(episode.timings[s])["median"] for s in STAGES[:-1]}
+    return {
+        "name": name, "skipped": None, "ticks": episode.ticks, "sim_s": episode.sim_s,
+        **{f"{k}_us": v for k, v in total.items()},
+        "stage_median_us": stages,
+        "max_eq_violation": _finite_or_none(np.nanmax(violations[:, 0])),
+        "max_ineq_violation": _finite_or_none(np.nanmax(violations[:, 1])),
+        "failures": episode.failures,
+        "total_samples_us": [round(1e6 * t, 2) for t in episode.timings["total"]],
+    }
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
+
+
+# ---------------------------------------------------------------------------- scaling
+
+
+def _qp_size(controller: BalanceController) -> str:
+    if isinstance(controller, PlacoController):
+        p = controller.solver.problem
+        return (f"{p.n_variables} var ({p.free_variables} free), "
+                f"{p.n_inequalities} ineq")
+    p = controller.problem  # type: ignore[attr-defined]
+    return f"{p.n} var, {p.m} rows + bounds"
+
+
+def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
+                ) -> list[dict[str, Any]]:
+    """Tick times standing on four feet, then with FR held up (swing task on, then off)."""
+    controller = factory()
+    sim = Go2Simulator()
+    q, _ = sim.state()
+    controller.reset(q)
+
+    def tick(n: int) -> list[float]:
+        times = []
+        for _ in range(n):
+            if lift is not None:
+                lift.update(sim.time_s)
+            q, v = sim.state()
+            out = controller.step(q, v)
+            sim.step(out.tau)
+            times.append(out.timings["total"])
+        return times
+
+    lift = None
+    tick(WARMUP_TICKS)
+    rows = [("4 contacts, standing", tick(ticks))]
+    size4 = _qp_size(controller)
+    lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=1e3, timing=SCALING_TIMING)
+    lift.start(sim.time_s)
+    while lift.phase is not LiftPhase.HOLDING:
+        tick(1)
+    tick(ticks)  # settle at the hold (untimed)
+    rows.append(("3 contacts + swing-foot task (FR held up)", tick(ticks)))
+    size3 = _qp_size(controller)
+    controller.set_foot_weight(LEG, 0.0)
+    rows.append(("3 contacts, swing-foot task weight 0", tick(ticks)))
+    sizes = [size4, size3, size3]
+    return [{"controller": name, "scenario": label, "qp": size, "ticks": len(times),
+             **{f"{k}_us": v for k, v in _stats_us(times).items()}}
+            for (label, times), size in zip(rows, sizes)]
+
+
+# ---------------------------------------------------------------------------- reporting
+
+
+def machine() -> dict[str, Any]:
+    """CPU, cores, Python and the versions of the numerical packages."""
+    cpu = platform.processor() or "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    versions = {}
+    for package in PACKAGES:
+        try:
+            versions[package] = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            versions[package] = None
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
+            "platform": platform.platform(), "versions": versions}
+
+
+def _fmt(value: Any, digits: int = 0) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.{digits}f}" if digits >= 0 else f"{value:.1e}"
+    return str(value)
+
+
+def format_report(report: dict[str, Any]) -> str:
+    """The three tables as plain text."""
+    m = report["machine"]
+    versions = ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
+    lines = [f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}; {versions}",
+             f"Mode: {report['mode']}. {report['episode']['description']}", ""]
+    head = (f"{'backend':<22}{'ticks':>6}{'model':>7}{'tasks':>7}{'asm':>7}{'solve':>8}"
+            f"{'median':>8}{'p90':>8}{'p99':>8}{'max':>8}{'eq viol':>9}{'ineq viol':>10}"
+            f"{'fail':>5}{'x PlaCo':>8}")
+    lines += ["Tick time [us] per backend (stage columns: medians)", head, "-" * len(head)]
+    for row in report["backends"]:
+        if row["skipped"]:
+            lines.append(f"{row['name']:<22}skipped: {row['skipped']}")
+            continue
+        st = row["stage_median_us"]
+        lines.append(
+            f"{row['name']:<22}{row['ticks']:>6}{_fmt(st['model']):>7}{_fmt(st['tasks']):>7}"
+            f"{_fmt(st['assembly']):>7}{_fmt(st['solve']):>8}{_fmt(row['median_us']):>8}"
+            f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}{_fmt(row['max_us']):>8}"
+            f"{_fmt(row['max_eq_violation'], -1):>9}{_fmt(row['max_ineq_violation'], -1):>10}"
+            f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}")
+    lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
+    head = f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}{'p99':>8}"
+    lines += [head, "-" * len(head)]
+    for row in report["scaling"]:
+        lines.append(f"{row['controller']:<16}{row['scenario']:<44}{row['qp']:<36}"
+                     f"{row['ticks']:>6}{_fmt(row['median_us']):>8}{_fmt(row['p90_us']):>8}"
+                     f"{_fmt(row['p99_us']):>8}")
+    ep = report["episode_table"]
+    lines += ["", f"Episode quality, {ep['controller']} ({ep['description']})"]
+    for key, value in ep["metrics"].items():
+        lines.append(f"  {key:<30}{_fmt(value, 3) if isinstance(value, float) else value}")
+    lines += ["", *[f"Note: {n}" for n in report["notes"]]]
+    return "\n".join(lines)
+
+
+def plot(report: dict[str, Any], path: Path) -> None:
+    """Tick-time distribution per backend (box plot, log scale) and the median stages."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in report["backends"] if not r["skipped"]]
+    fig, (left, right) = plt.subplots(1, 2, figsize=(14, 5.5),
+                                      gridspec_kw={"width_ratios": [3, 2]})
+    left.boxplot([r["total_samples_us"] for r in rows], whis=(1, 99), showfliers=True,
+                 flierprops={"markersize": 2, "alpha": 0.3})
+    left.set_xticks(range(1, len(rows) + 1), [r["name"] for r in rows], rotation=35,
+                    ha="right")
+    left.set_yscale("log")
+    left.set_ylabel("tick time [us] (whiskers: p1-p99)")
+    left.set_title(f"Control tick, closed-loop high five ({report['mode']} mode)")
+    left.grid(True, which="both", axis="y", alpha=0.3)
+    bottom = np.zeros(len(rows))
+    for stage in STAGES[:-1]:
+        values = np.array([r["stage_median_us"][stage] or 0.0 for r in rows])
+        right.barh(range(len(rows)), values, left=bottom, label=stage)
+        bottom += values
+    right.set_yticks(range(len(rows)), [r["name"] for r in rows])
+    right.set_xlabel("median stage time [us] (stacked; PlaCo: model + solve)")
+    right.legend(loc="lower right")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------------- main
+
+
+def _controllers() -> list[tuple[str, Callable[[], BalanceController]]]:
+    makers: list[tuple[str, Callable[[], BalanceController]]] = [
+        (f"{DEFAULT} ({ControllerConfig().backend})", WholeBodyController)]
+    for name in available_backends():
+        makers.append((name, lambda name=name: WholeBodyController(backend=name)))
+    makers.append((PLACO, PlacoController))
+    return makers
+
+
+def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Measure everything; returns the report (see the module docstring)."""
+    hold_s = 0.3 if quick else 2.0
+    stop = QUICK_LIFT_S if quick else None
+    rows: list[dict[str, Any]] = []
+    log("  process warm-up (discarded)")
+    run_episode(WholeBodyController(), hold_s=hold_s, stop_after_s=0.2)
+    for name, factory in _controllers():
+        log(f"  episode: {name}")
+        try:
+            controller = factory()
+        except Exception as err:  # noqa: BLE001 - a broken backend becomes a skipped row
+            rows.append({"name": name, "skipped": f"{type(err).__name__}: {err}"})
+            continue
+        episode = run_episode(controller, hold_s=hold_s, stop_after_s=stop,
+                              timing=QUICK_TIMING if quick else None)
+        rows.append(backend_row(name, episode))
+    rows += [{"name": name, "skipped": reason} for name, reason in missing_backends().items()]
+    placo_median = next((r["median_us"] for r in rows if r["name"] == PLACO and not r["skipped"]),
+                        None)
+    for row in rows:
+        if not row["skipped"]:
+            row["ratio_to_placo"] = (row["median_us"] / placo_median) if placo_median else None
+
+    log("  episode quality: default backend, whole lift")
+    quality = run_episode(WholeBodyController(), hold_s=hold_s, stop_after_s=None, quality=True)
+    log("  scaling")
+    ticks = 200 if quick else 500
+    scaling = run_scaling(DEFAULT, WholeBodyController, ticks)
+    scaling += run_scaling(PLACO, PlacoController, ticks)
+
+    lift_desc = (f"{WARMUP_TICKS} standing warm-up ticks (excluded), then LegLift {LEG} to "
+                 f"{HEIGHT_M:.2f} m, hold {hold_s:g} s, 1 kHz torque control in MuJoCo")
+    if quick:
+        t = QUICK_TIMING
+        lift_desc += (f"; timing episodes shift in {t.shift_s:g} s, unload in {t.unload_s:g} s "
+                      f"and stop after {QUICK_LIFT_S:g} s of the lift (start of the raise)")
+    notes = [
+        (f"The first {WARMUP_TICKS} ticks (standing, before the lift) of every episode are "
+         "warm-up and excluded from every statistic."),
+        ("Stage columns: WholeBodyController's model/tasks/assembly/solve; PlaCo reports model "
+         "(update_kinematics) and solve (its task update, assembly and QP together)."),
+        ("Violations: WholeBodyController's last_solution checked with problem.violations() "
+         "right after each step; PlaCo's are its hard rows (floating-base torque, stance-foot "
+         "accelerations, torque limits, unilateral and friction rows), from "
+         "ControlOutput.violation."),
+        "Fallback ticks count in the timing statistics and as failures.",
+        ("Before the first row, one short episode of the default controller warms the process "
+         "up (imports, caches) and is discarded. Times depend on the machine's load."),
+        ("Scaling: the WholeBodyController QP has a fixed size whatever the contacts (a swing "
+         "foot's rows are unbounded) and assembles a swing task even at weight 0 "
+         "(set_foot_weight), so that row shows the solver's share only; PlaCo's QP loses a "
+         "contact's 3 force variables and 5 rows. At weight 0 the foot droops under the "
+         "posture task."),
+        ("Episode quality is MuJoCo-measured except the CoM (Pinocchio, measured state) and "
+         f"the foot target (the controller's); the CoM margin is sampled every {MARGIN_EVERY} "
+         "ticks, over the feet MuJoCo sees loaded (> 1 N). Real-time factor: sim time over "
+         "the wall time of lift update + controller + physics (metric queries excluded)."),
+    ]
+    return {
+        "machine": machine(),
+        "mode": "quick" if quick else "full",
+        "episode": {"leg": LEG, "height_m": HEIGHT_M, "hold_s": hold_s,
+                    "warmup_ticks_excluded": WARMUP_TICKS,
+                    "stop_after_lift_s": stop, "description": lift_desc},
+        "backends": rows,
+        "scaling": scaling,
+        "episode_table": {"controller": f"{DEFAULT} backend",
+                          "description": f"whole lift, hold {hold_s:g} s",
+                          "sim_s": quality.sim_s,
+                          "metrics": quality.metrics},
+        "notes": notes,
+    }
+
+
+def _json_safe(value: Any) -> Any:
+    """Non-finite numbers become ``null`` (JSON has no NaN or infinity)."""
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    if isinstance(value, np.integer | np.bool_):
+        return value.item()
+    return value
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command-line entry point."""
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.qp_timing",
+                                     description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help=f"stop each timing episode after {QUICK_LIFT_S:g} s of the lift")
+    parser.add_argument("--json", type=Path, default=Path("out/qp_timing.json"),
+                        help="where to write the report (default: out/qp_timing.json)")
+    parser.add_argument("--plot", type=Path, default=Path("out/qp_timing.png"),
+                        help="where to write the plot (default: out/qp_timing.png)")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    with warnings.catch_warnings():
+        # Notices third-party solvers repeat every tick (qpsolvers converting dense matrices
+        # for OSQP, osqp's raise_error default); the conversion's cost stays in the timing.
+        warnings.filterwarnings("ignore", message="Converted matrix")
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        report = run(quick=args.quick, log=lambda msg: print(
+            f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
+    report["benchmark_wall_s"] = time.perf_counter() - started
+    print(format_report(report))
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(_json_safe(report), indent=1, allow_nan=False))
+    plot(report, args.plot)
+    print(f"\nWrote {args.json} and {args.plot} in {report['benchmark_wall_s']:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,81 @@
+"""benchmarks.qp_timing --quick: the report's structure, the JSON file and the plot."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from benchmarks import qp_timing
+from wbc import available_backends
+from wbc.backends import missing_backends
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("bench")
+    json_path, png_path = folder / "report.json", folder / "timing.png"
+    assert qp_timing.main(["--quick", "--json", str(json_path), "--plot", str(png_path)]) == 0
+    return json.loads(json_path.read_text()), png_path
+
+
+def test_machine_block(quick_run):
+    report, _ = quick_run
+    machine = report["machine"]
+    assert machine["cpu"] and machine["cores"] >= 1 and machine["python"].startswith("3.11")
+    for package in ("pin", "placo", "mujoco", "daqp", "osqp", "qpsolvers", "numpy"):
+        assert machine["versions"][package], package
+    assert report["mode"] == "quick"
+    assert report["episode"]["warmup_ticks_excluded"] == 200
+
+
+def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
+    report, _ = quick_run
+    rows = {row["name"]: row for row in report["backends"]}
+    expected = {"default (daqp)", "placo", *available_backends(), *missing_backends()}
+    assert set(rows) == expected
+    for name, row in rows.items():
+        if name in missing_backends():
+            assert row["skipped"], name
+            continue
+        assert row["skipped"] is None, (name, row["skipped"])
+        assert row["ticks"] == 1000, name
+        assert 0 < row["median_us"] <= row["p90_us"] <= row["p99_us"] <= row["max_us"], name
+        assert len(row["total_samples_us"]) == row["ticks"]
+        assert row["ratio_to_placo"] > 0
+        assert isinstance(row["failures"], int)
+        if row["failures"] < row["ticks"]:
+            # Tight-tolerance solvers: a solution that breaks its own constraints is a bug.
+            assert row["max_eq_violation"] < 1e-5 and row["max_ineq_violation"] < 1e-5, name
+    assert rows["placo"]["ratio_to_placo"] == pytest.approx(1.0)
+    assert rows["placo"]["stage_median_us"]["tasks"] is None
+    assert rows["daqp"]["failures"] == 0
+
+
+def test_scaling_and_episode_tables(quick_run):
+    report, _ = quick_run
+    scenarios = {(row["controller"], row["scenario"]) for row in report["scaling"]}
+    assert len(scenarios) == 6
+    for row in report["scaling"]:
+        assert row["ticks"] == 200 and row["median_us"] > 0
+    metrics = report["episode_table"]["metrics"]
+    for key in ("foot_tracking_rms_mm", "foot_tracking_max_mm", "foot_hold_rms_mm",
+                "stance_sliding_max_mm", "stance_foot_travel_max_mm",
+                "min_stance_normal_force_n", "min_com_margin_mm", "max_base_tilt_deg",
+                "max_torque_fraction", "max_torque_jump_nm", "qp_failures", "real_time_factor"):
+        assert isinstance(metrics[key], (int, float)), key
+    # The default controller lifts the foot and balances: loose bounds that still fail on a
+    # fall, a dropped foot or a saturated motor.
+    assert metrics["lift_completed"] is True
+    assert metrics["qp_failures"] == 0
+    assert metrics["foot_tracking_max_mm"] < 20.0
+    assert metrics["min_stance_normal_force_n"] > 0.0
+    assert metrics["max_base_tilt_deg"] < 5.0
+    assert metrics["max_torque_fraction"] < 0.9
+
+
+def test_plot_is_a_png(quick_run):
+    _, png_path = quick_run
+    assert png_path.read_bytes()[:8] == PNG_SIGNATURE
