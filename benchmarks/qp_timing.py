@@ -33,18 +33,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
+from sim.episode_metrics import EpisodeMetrics
 from sim.simulator import Go2Simulator
 from wbc import (
-    LEGS,
     BalanceController,
     ControllerConfig,
     LegLift,
     LegLiftTiming,
     LiftPhase,
     PlacoController,
-    SupportPolygon,
     WholeBodyController,
     available_backends,
 )
@@ -62,10 +60,6 @@ QUICK_LIFT_S = 1.0
 QUICK_TIMING = LegLiftTiming(shift_s=0.5005, unload_s=0.3005)
 #: The scaling runs only need to reach the hold: they get there faster.
 SCALING_TIMING = LegLiftTiming(shift_s=0.5005, unload_s=0.3005, raise_s=0.8005)
-#: A foot counts in the measured support polygon above this MuJoCo normal force [N].
-LOADED_N = 1.0
-#: The CoM margin is sampled every this many ticks (a polygon per tick costs ~0.1 ms).
-MARGIN_EVERY = 5
 PACKAGES = ("pin", "placo", "mujoco", "daqp", "osqp", "qpsolvers", "numpy", "proxsuite", "piqp",
             "quadprog")
 
@@ -111,72 +105,6 @@ def _record(episode: Episode, controller: BalanceController, out: Any) -> None:
         episode.violations.append(violation)
 
 
-class _Quality:
-    """Accumulates the episode-table metrics tick by tick (MuJoCo-measured where possible)."""
-
-    def __init__(self, sim: Go2Simulator, controller: BalanceController):
-        self.sim, self.controller = sim, controller
-        self.stance = [leg for leg in LEGS if leg != LEG]
-        feet = sim.foot_positions()
-        self.ground = {leg: feet[leg][:2].copy() for leg in self.stance}
-        self.slide = {leg: np.zeros(2) for leg in self.stance}
-        self.errors: list[tuple[str, float]] = []
-        self.min_force = np.inf
-        self.min_margin = np.inf
-        self.max_tilt = 0.0
-        self.max_fraction = 0.0
-        self.max_jump = 0.0
-        self.travel = 0.0
-        self.max_slide = 0.0
-        self.limit = sim.description.effort_limit
-        self.tau_prev: np.ndarray | None = None
-        self.ticks = 0
-
-    def update(self, phase: LiftPhase, q: np.ndarray, tau: np.ndarray) -> None:
-        """Account one tick: ``q`` is the state the controller saw, ``tau`` its command."""
-        sim, dt = self.sim, self.sim.timestep_s
-        self.ticks += 1
-        feet, forces = sim.foot_positions(), sim.foot_contact_forces()
-        sliding = sim.foot_sliding_velocities()
-        for leg in self.stance:
-            self.slide[leg] += sliding[leg] * dt
-            self.max_slide = max(self.max_slide, float(np.linalg.norm(self.slide[leg])))
-            self.travel = max(self.travel, float(np.linalg.norm(feet[leg][:2] - self.ground[leg])))
-            self.min_force = min(self.min_force, float(forces[leg][2]))
-        if phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
-            target = _foot_target(self.controller, LEG)
-            self.errors.append((phase.value, float(np.linalg.norm(feet[LEG] - target))))
-        if self.ticks % MARGIN_EVERY == 0:
-            loaded = [feet[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_N]
-            com = self.controller.com_position()
-            margin = (SupportPolygon.signed_distance(np.array(loaded), com)
-                      if len(loaded) >= 3 else -np.inf)
-            self.min_margin = min(self.min_margin, margin)
-        rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
-        self.max_tilt = max(self.max_tilt, float(np.arccos(np.clip(rotation[2, 2], -1.0, 1.0))))
-        self.max_fraction = max(self.max_fraction, float(np.max(np.abs(tau) / self.limit)))
-        if self.tau_prev is not None:
-            self.max_jump = max(self.max_jump, float(np.max(np.abs(tau - self.tau_prev))))
-        self.tau_prev = np.array(tau, dtype=float)
-
-    def summary(self) -> dict[str, float]:
-        errors = np.array([e for _, e in self.errors]) if self.errors else np.full(1, np.nan)
-        hold = np.array([e for p, e in self.errors if p == LiftPhase.HOLDING.value] or [np.nan])
-        return {
-            "foot_tracking_rms_mm": 1e3 * float(np.sqrt(np.mean(errors ** 2))),
-            "foot_tracking_max_mm": 1e3 * float(np.max(errors)),
-            "foot_hold_rms_mm": 1e3 * float(np.sqrt(np.mean(hold ** 2))),
-            "foot_hold_max_mm": 1e3 * float(np.max(hold)),
-            "stance_sliding_max_mm": 1e3 * self.max_slide,
-            "stance_foot_travel_max_mm": 1e3 * self.travel,
-            "min_stance_normal_force_n": self.min_force,
-            "min_com_margin_mm": 1e3 * self.min_margin,
-            "max_base_tilt_deg": float(np.degrees(self.max_tilt)),
-            "max_torque_fraction": self.max_fraction,
-            "max_torque_jump_nm": self.max_jump,
-        }
-
-
 def _foot_target(controller: BalanceController, leg: str) -> np.ndarray:
     """The controller's current swing-foot target (the protocol has no getter for it)."""
     task = controller.foot_tasks[leg]  # type: ignore[attr-defined]
@@ -193,8 +121,9 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
         hold_s: Hold time of the lift [s].
         stop_after_s: Stop after this much lift time [s] (``None``: run the whole lift).
         timing: The lift's phase durations (LegLift's defaults when ``None``).
-        quality: Also collect the episode-table metrics (adds MuJoCo queries per tick,
-            excluded from the real-time factor).
+        quality: Also collect the episode-table metrics with
+            :class:`sim.episode_metrics.EpisodeMetrics` (its MuJoCo queries are excluded
+            from the real-time factor).
     """
     sim = Go2Simulator()
     episode = Episode()
@@ -208,7 +137,7 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
     lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
     lift.start(sim.time_s)
     start = sim.time_s
-    meter = _Quality(sim, controller) if quality else None
+    meter = EpisodeMetrics(sim, sim.description.effort_limit) if quality else None
     while lift.phase is not LiftPhase.DONE:
         if stop_after_s is not None and sim.time_s - start >= stop_after_s - 1e-9:
             break
@@ -220,12 +149,15 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
         episode.control_wall_s += time.perf_counter() - wall
         _record(episode, controller, out)
         if meter is not None:
-            meter.update(phase, q, out.tau)
+            error = None
+            if phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
+                error = float(np.linalg.norm(sim.foot_positions()[LEG]
+                                             - _foot_target(controller, LEG)))
+            meter.record(out, stance_legs=controller.support_legs(), foot_error_m=error,
+                         holding=phase is LiftPhase.HOLDING)
     episode.sim_s = sim.time_s
     if meter is not None:
-        episode.metrics = meter.summary()
-        episode.metrics["qp_failures"] = episode.failures
-        episode.metrics["real_time_factor"] = episode.sim_s / episode.control_wall_s
+        episode.metrics = meter.summary(episode.control_wall_s).as_dict()
         episode.metrics["lift_completed"] = lift.phase is LiftPhase.DONE
     return episode
 
@@ -474,9 +406,9 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
          "(set_foot_weight), so that row shows the solver's share only; PlaCo's QP loses a "
          "contact's 3 force variables and 5 rows. At weight 0 the foot droops under the "
          "posture task."),
-        ("Episode quality is MuJoCo-measured except the CoM (Pinocchio, measured state) and "
-         f"the foot target (the controller's); the CoM margin is sampled every {MARGIN_EVERY} "
-         "ticks, over the feet MuJoCo sees loaded (> 1 N). Real-time factor: sim time over "
+        ("Episode quality: sim.episode_metrics (MuJoCo-measured; stance feet are the fully "
+         "loaded ones, the CoM margin is over the feet MuJoCo sees loaded), raised-foot error "
+         "against the controller's foot target. Real-time factor: the lift's sim time over "
          "the wall time of lift update + controller + physics (metric queries excluded)."),
     ]
     return {
