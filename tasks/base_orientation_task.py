@@ -14,14 +14,17 @@ class BaseOrientationTask(Task):
     """Track a world-frame orientation of the floating base.
 
     Errors and rates are in the base frame, where the free-flyer velocity's angular part
-    is ``v[3:6]``: the Jacobian is a selection and the drift is zero.
+    is ``v[3:6]``: the Jacobian is a selection and the drift is zero. ``reference`` rows 1
+    and 2 hold a target angular velocity and a feed-forward (base frame).
     """
 
     dim = 3
 
     def __init__(self, *, kp: float = 100.0, kd: float | None = None, weight: float = 5.0):
         super().__init__(kp=kp, kd=kd, weight=weight)
-        self.target = np.eye(3)
+        #: Target rotation ``R_world_base`` (updated in place).
+        self.rotation = np.eye(3)
+        self._has_target = True
         self.jacobian[:, 3:6] = np.eye(3)
 
     def set_target(self, rotation: np.ndarray) -> None:
@@ -32,7 +35,12 @@ class BaseOrientationTask(Task):
             raise ConfigurationError(
                 "BaseOrientationTask.target: expected a rotation matrix (orthonormal, det +1)"
             )
-        self.target = flat.copy()
+        self.rotation[:] = flat
+
+    @property
+    def target(self) -> np.ndarray:
+        """A copy of the target rotation (3x3)."""
+        return self.rotation.copy()
 
     def set_rpy(self, roll: float, pitch: float, yaw: float) -> None:
         """Set the target from roll, pitch, yaw [rad] (extrinsic X, Y, Z)."""
@@ -40,5 +48,5 @@ class BaseOrientationTask(Task):
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
         rotation = data.oMi[1].rotation
-        self.error[:] = pin.log3(rotation.T @ self.target)
-        np.negative(data.v[1].angular, out=self.error_rate)
+        self.error[:] = pin.log3(rotation.T @ self.rotation)
+        np.subtract(self.reference[1], v[3:6], out=self.error_rate)

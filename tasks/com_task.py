@@ -6,7 +6,6 @@ import numpy as np
 import pinocchio as pin
 
 from tasks.task import Task
-from wbc.validation import as_vector
 
 
 class ComTask(Task):
@@ -20,19 +19,13 @@ class ComTask(Task):
 
     def __init__(self, *, kp: float = 100.0, kd: float | None = None, weight: float = 10.0):
         super().__init__(kp=kp, kd=kd, weight=weight)
-        self.target: np.ndarray | None = None
-        self.target_velocity = np.zeros(3)
 
     def set_target(self, position: np.ndarray, velocity: np.ndarray | None = None) -> None:
         """Set the target position [m] and velocity [m/s] (world frame); copies them."""
-        position = as_vector("ComTask.target", position, 3)
-        velocity = np.zeros(3) if velocity is None else as_vector(
-            "ComTask.target_velocity", velocity, 3)
-        self.target, self.target_velocity = position, velocity
+        self._set_reference("ComTask", position, velocity)
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        target = self._require_target(self.target)
-        np.subtract(target, data.com[0], out=self.error)
-        np.subtract(self.target_velocity, data.vcom[0], out=self.error_rate)
+        np.subtract(self._require_target(), data.com[0], out=self.error)
+        np.subtract(self.reference[1], data.vcom[0], out=self.error_rate)
         self.jacobian[:] = data.Jcom
         self.drift[:] = data.acom[0]

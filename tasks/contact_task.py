@@ -47,6 +47,7 @@ class ContactTask(Task):
         self.dim = 3 * len(frames)
         self.radius_m = float(radius_m)
         super().__init__(kp=0.0, kd=kd, weight=1.0, nv=model.nv)
+        self._has_target = True  # the target is implicit: no acceleration
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
         jac, drift, r = self.jacobian, self.drift, self.radius_m

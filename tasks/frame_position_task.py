@@ -7,7 +7,6 @@ import pinocchio as pin
 
 from tasks.task import Task
 from wbc.errors import ConfigurationError
-from wbc.validation import as_vector
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -39,25 +38,20 @@ class FramePositionTask(Task):
         self._rows = [_AXES[a] for a in axes]
         self.dim = len(axes)
         super().__init__(kp=kp, kd=kd, weight=weight, nv=model.nv)
-        self.target: np.ndarray | None = None
-        self.target_velocity = np.zeros(self.dim)
 
     def set_target(self, position: np.ndarray, velocity: np.ndarray | None = None) -> None:
         """Set the target position [m] and velocity [m/s] on the task's axes; copies them."""
-        position = as_vector(f"{self.frame}.target", position, self.dim)
-        velocity = np.zeros(self.dim) if velocity is None else as_vector(
-            f"{self.frame}.target_velocity", velocity, self.dim)
-        self.target, self.target_velocity = position, velocity
+        self._set_reference(self.frame, position, velocity)
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        target = self._require_target(self.target)
+        target = self._require_target()
         rows = self._rows
         jac = pin.getFrameJacobian(model, data, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
         self.jacobian[:] = jac[rows]
         position = data.oMf[self.frame_id].translation
         np.subtract(target, position[rows], out=self.error)
         velocity = pin.getFrameVelocity(model, data, self.frame_id, pin.LOCAL_WORLD_ALIGNED).linear
-        np.subtract(self.target_velocity, velocity[rows], out=self.error_rate)
+        np.subtract(self.reference[1], velocity[rows], out=self.error_rate)
         acc = pin.getFrameClassicalAcceleration(model, data, self.frame_id,
                                                 pin.LOCAL_WORLD_ALIGNED).linear
         self.drift[:] = acc[rows]

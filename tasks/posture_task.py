@@ -22,16 +22,11 @@ class PostureTask(Task):
         self.dim = n_joints
         super().__init__(kp=kp, kd=kd, weight=weight, nv=6 + n_joints)
         self.jacobian[:, 6:] = np.eye(n_joints)
-        self.target: np.ndarray | None = None
-        self.target_velocity = np.zeros(n_joints)
         self.joint_weights = np.ones(n_joints)
 
     def set_target(self, joint_positions: np.ndarray, velocity: np.ndarray | None = None) -> None:
         """Set the target joint positions [rad] and velocities [rad/s]; copies them."""
-        target = as_vector("PostureTask.target", joint_positions, self.dim)
-        velocity = np.zeros(self.dim) if velocity is None else as_vector(
-            "PostureTask.target_velocity", velocity, self.dim)
-        self.target, self.target_velocity = target, velocity
+        self._set_reference("PostureTask", joint_positions, velocity)
 
     def set_joint_weights(self, weights: np.ndarray) -> None:
         """Relative weights (n_joints,), each >= 0, multiplying ``weight`` joint by joint."""
@@ -39,9 +34,8 @@ class PostureTask(Task):
         if np.any(weights < 0.0):
             raise ConfigurationError(
                 f"PostureTask.joint_weights: expected values >= 0, received {weights.tolist()}")
-        self.joint_weights = weights
+        self.joint_weights[:] = weights
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        target = self._require_target(self.target)
-        np.subtract(target, q[7:], out=self.error)
-        np.subtract(self.target_velocity, v[6:], out=self.error_rate)
+        np.subtract(self._require_target(), q[7:], out=self.error)
+        np.subtract(self.reference[1], v[6:], out=self.error_rate)

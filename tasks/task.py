@@ -25,6 +25,10 @@ class Task:
 
     The QP term is ``weight * ||jacobian @ qdd + drift - desired_acceleration||^2``.
     Gains default to critical damping, ``kd = 2 sqrt(kp)``.
+
+    The references live in ``reference`` (3, dim): target, target velocity, feed-forward
+    acceleration; the gains in ``gains``: kp, kd, weight. Both are updated in place (setters
+    copy their arguments in), so a compiled controller can read them without copies.
     """
 
     #: Number of task rows.
@@ -39,28 +43,70 @@ class Task:
             nv: Dimension of the velocity vector.
         """
         self.nv = nv
+        self.gains = np.zeros(3)
+        self.reference = np.zeros((3, self.dim))
+        self._has_target = False
         self.set_gains(kp=kp, kd=kd)
-        self.weight = as_float("weight", weight, low=0.0)
+        self.set_weight(weight)
         self.error = np.zeros(self.dim)
         self.error_rate = np.zeros(self.dim)
         self.jacobian = np.zeros((self.dim, nv))
         self.drift = np.zeros(self.dim)
         self.desired_acceleration = np.zeros(self.dim)
-        self.feedforward = np.zeros(self.dim)
+
+    @property
+    def kp(self) -> float:
+        """Stiffness [1/s^2]."""
+        return float(self.gains[0])
+
+    @property
+    def kd(self) -> float:
+        """Damping [1/s]."""
+        return float(self.gains[1])
+
+    @property
+    def weight(self) -> float:
+        """Cost weight."""
+        return float(self.gains[2])
+
+    @property
+    def target(self) -> np.ndarray | None:
+        """A copy of the target (``None`` until set)."""
+        return self.reference[0].copy() if self._has_target else None
+
+    @property
+    def target_velocity(self) -> np.ndarray:
+        """A copy of the target velocity."""
+        return self.reference[1].copy()
+
+    @property
+    def feedforward(self) -> np.ndarray:
+        """A copy of the feed-forward acceleration."""
+        return self.reference[2].copy()
 
     def set_gains(self, *, kp: float, kd: float | None = None) -> None:
         """Set stiffness ``kp`` [1/s^2] and damping ``kd`` [1/s] (critical when ``None``)."""
         kp = as_float("kp", kp, low=0.0)
         kd = 2.0 * math.sqrt(kp) if kd is None else as_float("kd", kd, low=0.0)
-        self.kp, self.kd = kp, kd
+        self.gains[0], self.gains[1] = kp, kd
 
     def set_weight(self, weight: float) -> None:
         """Set the cost weight (>= 0)."""
-        self.weight = as_float("weight", weight, low=0.0)
+        self.gains[2] = as_float("weight", weight, low=0.0)
 
     def set_feedforward(self, acceleration: np.ndarray) -> None:
         """Set the feed-forward task acceleration (dim,)."""
-        self.feedforward = as_vector(f"{type(self).__name__}.feedforward", acceleration, self.dim)
+        self.reference[2] = as_vector(f"{type(self).__name__}.feedforward", acceleration,
+                                      self.dim)
+
+    def _set_reference(self, name: str, target: np.ndarray,
+                       velocity: np.ndarray | None) -> None:
+        """Validate both, then store both (a rejected value leaves the old ones)."""
+        target = as_vector(f"{name}.target", target, self.dim)
+        velocity = np.zeros(self.dim) if velocity is None else as_vector(
+            f"{name}.target_velocity", velocity, self.dim)
+        self.reference[0], self.reference[1] = target, velocity
+        self._has_target = True
 
     def update(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
         """Recompute error, Jacobian, drift and desired acceleration.
@@ -73,17 +119,18 @@ class Task:
         """
         self.compute(model, data, q, v)
         desired = self.desired_acceleration
-        np.multiply(self.kp, self.error, out=desired)
-        desired += self.kd * self.error_rate
-        desired += self.feedforward
+        np.multiply(self.gains[0], self.error, out=desired)
+        desired += self.gains[1] * self.error_rate
+        desired += self.reference[2]
 
     def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
         """Fill ``error``, ``error_rate``, ``jacobian`` and ``drift``; subclasses implement."""
         raise NotImplementedError
 
-    def _require_target(self, target: np.ndarray | None) -> np.ndarray:
-        if target is None:
+    def _require_target(self) -> np.ndarray:
+        """The target (the internal array), or a clear error when it was never set."""
+        if not self._has_target:
             raise ConfigurationError(
                 f"{type(self).__name__}: target not set; call set_target(...) first"
             )
-        return target
+        return self.reference[0]

@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from tasks import BaseOrientationTask, ComTask, ContactTask, FramePositionTask, PostureTask
+from wbc import qp_kernel
 from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
 from wbc.control_output import ControlOutput, ControlStatus
 from wbc.controller_config import ControllerConfig
@@ -98,6 +99,9 @@ class WholeBodyController:
         }
         self.support = SupportPolygon(margin_m=cfg.support_margin_m)
 
+        self._q_low = self.description.position_lower
+        self._q_high = self.description.position_upper
+        self._v_max = self.description.velocity_limit
         self._stance = dict.fromkeys(LEGS, True)
         self._max_force = dict.fromkeys(LEGS, cfg.max_normal_force_n)
         self._build_problem()
@@ -146,7 +150,7 @@ class WholeBodyController:
     @property
     def posture_target(self) -> np.ndarray:
         """Joint posture target [rad] (12,), description order (a copy)."""
-        return np.array(self.posture_task._require_target(self.posture_task.target))
+        return self.posture_task._require_target().copy()
 
     def set_posture_target(self, joint_positions: np.ndarray,
                            velocity: np.ndarray | None = None,
@@ -167,7 +171,7 @@ class WholeBodyController:
     @property
     def com_target(self) -> np.ndarray:
         """The current centre-of-mass target [m] (a copy)."""
-        return np.array(self.com_task._require_target(self.com_task.target))
+        return self.com_task._require_target().copy()
 
     def com_position(self) -> np.ndarray:
         """Centre of mass [m] at the last state."""
@@ -176,7 +180,7 @@ class WholeBodyController:
     def foot_position(self, leg: str) -> np.ndarray:
         """World position [m] of a foot frame (sphere centre) at the last state."""
         check_name("leg", leg, LEGS)
-        return self.data.oMf[self.contact_task.frame_ids[_LEG_INDEX[leg]]].translation.copy()
+        return self._foot_pos[_LEG_INDEX[leg]].copy()
 
     def shoulder_position(self, leg: str) -> np.ndarray:
         """World position [m] of a leg's shoulder at the last state.
@@ -274,7 +278,7 @@ class WholeBodyController:
     # ------------------------------------------------------------------ the tick
 
     def step(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
-        """One control tick: model update, tasks, QP assembly and solve.
+        """One control tick: model update, tasks and QP assembly, solve.
 
         Never raises on bad numbers in the state or a failed solve: it returns the safe
         fallback command (joint damping around the last good torques) with status
@@ -287,32 +291,34 @@ class WholeBodyController:
         if q.shape != (self.model.nq,) or v.shape != (_NV,):
             return self._fallback(v, f"state: expected q {(self.model.nq,)} and v {(_NV,)}, "
                                      f"received {q.shape} and {v.shape}", t0)
-        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+        if not (math.isfinite(q.sum()) and math.isfinite(v.sum())):
             bad = [f"q[{i}]" for i in np.flatnonzero(~np.isfinite(q))]
             bad += [f"v[{i}]" for i in np.flatnonzero(~np.isfinite(v))]
             return self._fallback(v, f"state: non-finite values at {', '.join(bad)}", t0)
         self._update_model(q, v)
         t1 = time.perf_counter()
-        self._update_tasks(q, v)
-        t2 = time.perf_counter()
         self._assemble(q, v)
-        t3 = time.perf_counter()
+        t2 = time.perf_counter()
         result = self.backend.solve(self.problem)
-        t4 = time.perf_counter()
+        t3 = time.perf_counter()
         if not result.found:
             return self._fallback(v, f"QP failed: {result.reason}", t0, result=result)
         x = result.x
-        tau = self.problem.A[_TAU, :_S] @ x[:_S] + self._h_joints
+        tau = self.problem.A[_TAU, :_S] @ x[:_S] + self.data.nle[6:]
         self._x_prev[:] = x[:_S]
         self.last_solution = x
         self._tau_prev = tau
         self._tau_good = tau
-        t5 = time.perf_counter()
+        errors = self._errors
+        task_errors = {"com": errors[0], "base_orientation": errors[1], "posture": errors[2]}
+        for leg in self._swing_legs:
+            task_errors[f"{leg}_foot"] = errors[3 + _LEG_INDEX[leg]]
+        t4 = time.perf_counter()
         return ControlOutput(
             tau=tau, qdd=x[:_NV].copy(), forces=x[_F0:_S].reshape(_NC, 3).copy(),
-            status=ControlStatus.OK, task_errors=self._task_errors(),
-            timings={"model": t1 - t0, "tasks": t2 - t1, "assembly": t3 - t2,
-                     "solve": t4 - t3, "total": t5 - t0},
+            status=ControlStatus.OK, task_errors=task_errors,
+            timings={"model": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2,
+                     "total": t4 - t0},
         )
 
     def _update_model(self, q: np.ndarray, v: np.ndarray) -> None:
@@ -320,16 +326,11 @@ class WholeBodyController:
         pin.computeAllTerms(model, data, q, v)  # M, h, joint Jacobians, com, Jcom, bias acc.
         pin.updateFramePlacements(model, data)
         pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
+        world = pin.LOCAL_WORLD_ALIGNED
+        for i, fid in enumerate(self.contact_task.frame_ids):
+            self._foot_pos[i] = data.oMf[fid].translation
+            self._foot_acc[i] = pin.getFrameClassicalAcceleration(model, data, fid, world).vector
         self._q = q
-
-    def _update_tasks(self, q: np.ndarray, v: np.ndarray) -> None:
-        model, data = self.model, self.data
-        self.contact_task.update(model, data, q, v)
-        for leg in self._swing_legs:
-            self.foot_tasks[leg].update(model, data, q, v)
-        self.com_task.update(model, data, q, v)
-        self.base_task.update(model, data, q, v)
-        self.posture_task.update(model, data, q, v)
 
     # ------------------------------------------------------------------ QP assembly
 
@@ -352,9 +353,8 @@ class WholeBodyController:
         for name, rows in _GROUPS:
             p.row_groups[rows] = [name] * (rows.stop - rows.start)
         self.problem = p
-        self._h_const = np.zeros((_N, _N))
         diagonal = np.arange(_N)
-        self._diag = diagonal
+        self._h_const = np.zeros((_N, _N))
         self._h_const[diagonal[:_NV], diagonal[:_NV]] = (cfg.acceleration_weight
                                                          + cfg.acceleration_rate_weight)
         self._h_const[diagonal[_F0:_S], diagonal[_F0:_S]] = cfg.force_weight + cfg.force_rate_weight
@@ -362,25 +362,27 @@ class WholeBodyController:
         self._rate_weights = np.concatenate([np.full(_NV, cfg.acceleration_rate_weight),
                                              np.full(3 * _NC, cfg.force_rate_weight)])
         self._x_prev = np.zeros(_S)
-        self._m_full = np.zeros((_NV, _NV))
-        self._lower_mask = np.tril(np.ones((_NV, _NV), dtype=bool), -1)
-        self._h_joints = np.zeros(_NJ)
-        self._contact_rhs = np.zeros(3 * _NC)
-        self._dt_limit = cfg.joint_limit_horizon_s
-        self._q_low = self.description.position_lower
-        self._q_high = self.description.position_upper
-        self._v_max = self.description.velocity_limit
+        # Per-tick inputs and outputs of the compiled assembly, allocated once.
+        self._foot_pos = np.zeros((_NC, 3))
+        self._foot_acc = np.zeros((_NC, 6))
+        self._stance_flags = np.ones(_NC, dtype=np.bool_)
+        self._foot_refs = np.zeros((_NC, 3, 3))
+        self._foot_gains = np.zeros((_NC, 3))
+        self._normals = np.zeros((4, 2))
+        self._offsets = np.zeros(4)
+        self._n_edges = 0
+        self._jc = np.zeros((3 * _NC, _NV))
+        self._errors = np.zeros(3 + _NC)
         self._support_key: tuple[str, ...] | None = None
-        self._support_normals = np.zeros((0, 2))
-        self._support_offsets = np.zeros(0)
         self._swing_legs: list[str] = []
 
     def _contacts_changed(self) -> None:
-        """Refresh the bounds that depend on the contact modes (not on the state)."""
+        """Refresh what depends on the contact modes (not on the state)."""
         p, cfg = self.problem, self.config
         for i, leg in enumerate(LEGS):
             rows = slice(_CON.start + 3 * i, _CON.start + 3 * i + 3)
             fz = _F0 + 3 * i + 2
+            self._stance_flags[i] = self._stance[leg]
             if self._stance[leg]:
                 fmax = self._max_force[leg]
                 p.is_equality[rows] = True
@@ -393,108 +395,32 @@ class WholeBodyController:
         self._support_key = None
 
     def _assemble(self, q: np.ndarray, v: np.ndarray) -> None:
-        data, p = self.data, self.problem
-        # computeAllTerms fills only the upper triangle of M.
-        M = self._m_full
-        M[:] = data.M
-        np.copyto(M, M.T, where=self._lower_mask)
-        h = data.nle
-        self._h_joints = h[6:]
-        jc = self.contact_task.jacobian
-        A = p.A
-
-        A[_DYN, :_NV] = M[:6]
-        A[_DYN, _F0:_S] = -jc[:, :6].T
-        np.negative(h[:6], out=p.lower[_DYN])
-        p.upper[_DYN] = p.lower[_DYN]
-
-        A[_CON, :_NV] = jc
-        rhs = self._contact_rhs
-        task = self.contact_task
-        np.multiply(task.kd, task.error_rate, out=rhs)
-        rhs -= task.drift
-        p.lower[_CON] = rhs
-        p.upper[_CON] = rhs
-        for leg in self._swing_legs:
-            i = _LEG_INDEX[leg]
-            rows = slice(_CON.start + 3 * i, _CON.start + 3 * i + 3)
-            p.lower[rows], p.upper[rows] = -INFINITY, INFINITY
-
-        A[_TAU, :_NV] = M[6:]
-        A[_TAU, _F0:_S] = -jc[:, 6:].T
-        np.subtract(-self.tau_max, h[6:], out=p.lower[_TAU])
-        np.subtract(self.tau_max, h[6:], out=p.upper[_TAU])
-
-        self._assemble_support()
-        self._assemble_joint_bounds(q, v)
-
-        # Cost. Base orientation and posture Jacobians are selections: diagonal terms.
-        H, f = p.H, p.f
-        H[:] = self._h_const
-        d = self._diag
-        wo = self.base_task.weight
-        wp = self.posture_task.weight * self.posture_task.joint_weights
-        H[d[3:6], d[3:6]] += wo
-        H[d[6:_NV], d[6:_NV]] += wp
-        com = self.com_task
-        jw = com.weight * com.jacobian.T
-        H[:_NV, :_NV] += jw @ com.jacobian
-        np.matmul(jw, com.drift - com.desired_acceleration, out=f[:_NV])
-        f[3:6] -= wo * self.base_task.desired_acceleration
-        f[6:_NV] -= wp * self.posture_task.desired_acceleration
-        for leg in self._swing_legs:
-            foot = self.foot_tasks[leg]
-            jw = foot.weight * foot.jacobian.T
-            H[:_NV, :_NV] += jw @ foot.jacobian
-            f[:_NV] += jw @ (foot.drift - foot.desired_acceleration)
-        # Smoothness: a pull towards the previous tick's solution.
-        f[_F0:_S] = 0.0
-        f[:_S] -= self._rate_weights * self._x_prev
-
-    def _assemble_support(self) -> None:
-        p, data = self.problem, self.data
+        data, p, cfg = self.data, self.problem, self.config
         legs = tuple(self.support_legs())
-        if legs != self._support_key:
+        if legs != self._support_key:  # the polygon changes with the contacts only
             self._support_key = legs
-            p.lower[_SUP], p.upper[_SUP] = -INFINITY, INFINITY
-            p.A[_SUP, :_NV] = 0.0
+            self._n_edges = 0
             if len(legs) >= 3:
-                points = np.array([data.oMf[self.contact_task.frame_ids[_LEG_INDEX[leg]]]
-                                   .translation[:2] for leg in legs])
-                self._support_normals, self._support_offsets = self.support.halfplanes(points)
-            else:
-                self._support_normals = np.zeros((0, 2))
-        normals = self._support_normals
-        k = len(normals)
-        if k == 0:
-            return
-        omega = self.config.support_omega
-        rows = slice(_SUP.start, _SUP.start + k)
-        p.A[rows, :_NV] = normals @ data.Jcom[:2]
-        distance = normals @ data.com[0][:2] - self._support_offsets
-        bound = normals @ (data.acom[0][:2] + 2.0 * omega * data.vcom[0][:2])
-        bound += omega * omega * distance
-        np.negative(bound, out=p.lower[rows])
-
-    def _assemble_joint_bounds(self, q: np.ndarray, v: np.ndarray) -> None:
-        p, dt = self.problem, self._dt_limit
-        qj, vj = q[7:], v[6:]
-        # Stop within the horizon before a position limit; respect velocity limits.
-        upper = np.minimum(2.0 * (self._q_high - qj - vj * dt) / (dt * dt), (self._v_max - vj) / dt)
-        lower = np.maximum(2.0 * (self._q_low - qj - vj * dt) / (dt * dt), (-self._v_max - vj) / dt)
-        np.minimum(lower, upper, out=lower)
-        p.lb[6:_NV], p.ub[6:_NV] = lower, upper
-
-    def _task_errors(self) -> dict[str, float]:
-        def norm(e: np.ndarray) -> float:
-            return math.sqrt(float(e @ e))
-
-        errors = {"com": norm(self.com_task.error),
-                  "base_orientation": norm(self.base_task.error),
-                  "posture": norm(self.posture_task.error)}
+                points = self._foot_pos[[_LEG_INDEX[leg] for leg in legs], :2]
+                normals, offsets = self.support.halfplanes(points)
+                self._n_edges = len(normals)
+                self._normals[:self._n_edges], self._offsets[:self._n_edges] = normals, offsets
         for leg in self._swing_legs:
-            errors[f"{leg}_foot"] = norm(self.foot_tasks[leg].error)
-        return errors
+            task, i = self.foot_tasks[leg], _LEG_INDEX[leg]
+            self._foot_refs[i] = task.reference
+            self._foot_gains[i] = task.gains
+        qp_kernel.assemble(
+            data.M, data.nle, data.J, data.Jcom, data.com[0], data.vcom[0], data.acom[0],
+            data.oMi[1].rotation, q, v, self._foot_pos, self._foot_acc, self._stance_flags,
+            FOOT_RADIUS_M, self.contact_task.gains[1],
+            self.com_task.reference, self.com_task.gains,
+            self.base_task.rotation, self.base_task.reference, self.base_task.gains,
+            self.posture_task.reference, self.posture_task.gains, self.posture_task.joint_weights,
+            self._foot_refs, self._foot_gains,
+            self._normals, self._offsets, self._n_edges, cfg.support_omega,
+            self.tau_max, self._q_low, self._q_high, self._v_max, cfg.joint_limit_horizon_s,
+            self._h_const, self._rate_weights, self._x_prev,
+            p.H, p.f, p.A, p.lower, p.upper, p.lb, p.ub, self._jc, self._errors)
 
     # ------------------------------------------------------------------ failures
 
@@ -560,3 +486,11 @@ class WholeBodyController:
             if solver.solve(trial).found:
                 return name
         return ""
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the control tick's kernel, with one tick."""
+    controller = WholeBodyController()
+    q = controller.description.pose("standing")
+    controller.reset(q)
+    controller.step(q, np.zeros(_NV))
