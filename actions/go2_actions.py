@@ -6,7 +6,11 @@ from functools import partial
 
 from actions.action_runner import ActionRunner, BusyPolicy
 from actions.action_server import ActionServer
-from actions.action_type import HIGH_FIVE, SIT, STAND
+from actions.action_type import FOLLOW_JOINT_TRAJECTORY, HIGH_FIVE, SIT, STAND
+from actions.follow_joint_trajectory_behaviour import (
+    FollowJointTrajectoryBehaviour,
+    validate_follow_joint_trajectory_goal,
+)
 from actions.high_five_behaviour import HighFiveBehaviour, validate_high_five_goal
 from actions.messages import SitFeedback, SitResult, StandFeedback, StandResult
 from actions.pose_behaviour import PoseBehaviour, validate_pose_goal
@@ -33,4 +37,8 @@ def make_go2_runner(context: RobotContext, *,
     ActionServer(runner, SIT, SIT_ACTION,
                  partial(PoseBehaviour, context, "lying", SitResult, SitFeedback, "sitting"),
                  goal_callback=validate_pose_goal, max_unwind_s=3.0)
+    ActionServer(runner, FOLLOW_JOINT_TRAJECTORY, FOLLOW_JOINT_TRAJECTORY_ACTION,
+                 partial(FollowJointTrajectoryBehaviour, context),
+                 goal_callback=partial(validate_follow_joint_trajectory_goal, context),
+                 max_unwind_s=3.0)
     return runner
