@@ -74,6 +74,9 @@ class Episode:
     ticks: int = 0
     sim_s: float = 0.0
     control_wall_s: float = 0.0
+    #: Process CPU time over wall time of the episode: well below 1, other processes took
+    #: the CPU and the tail of the timings shows their preemptions, not the solver.
+    cpu_share: float = 1.0
     metrics: dict[str, float] = field(default_factory=dict)
 
 
@@ -127,6 +130,7 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
     """
     sim = Go2Simulator()
     episode = Episode()
+    clocks = time.process_time(), time.perf_counter()
     wall = time.perf_counter()
     q, v = sim.state()
     controller.reset(q)
@@ -156,6 +160,8 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
             meter.record(out, stance_legs=controller.support_legs(), foot_error_m=error,
                          holding=phase is LiftPhase.HOLDING)
     episode.sim_s = sim.time_s
+    episode.cpu_share = ((time.process_time() - clocks[0])
+                         / max(time.perf_counter() - clocks[1], 1e-9))
     if meter is not None:
         episode.metrics = meter.summary(episode.control_wall_s).as_dict()
         episode.metrics["lift_completed"] = lift.phase is LiftPhase.DONE
@@ -183,6 +189,7 @@ def backend_row(name: str, episode: Episode) -> dict[str, Any]:
         "max_eq_violation": _finite_or_none(np.nanmax(violations[:, 0])),
         "max_ineq_violation": _finite_or_none(np.nanmax(violations[:, 1])),
         "failures": episode.failures,
+        "cpu_share": episode.cpu_share,
         "total_samples_us": [round(1e6 * t, 2) for t in episode.timings["total"]],
     }
 
@@ -261,6 +268,7 @@ def machine() -> dict[str, Any]:
         except importlib.metadata.PackageNotFoundError:
             versions[package] = None
     return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
+            "load_average_1_5_15_min": list(os.getloadavg()),
             "platform": platform.platform(), "versions": versions}
 
 
@@ -276,11 +284,13 @@ def format_report(report: dict[str, Any]) -> str:
     """The three tables as plain text."""
     m = report["machine"]
     versions = ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
-    lines = [f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}; {versions}",
+    load = m["load_average_1_5_15_min"][0]
+    lines = [(f"Machine: {m['cpu']}, {m['cores']} cores, load {load:.2f} at start, "
+             f"Python {m['python']}; {versions}"),
              f"Mode: {report['mode']}. {report['episode']['description']}", ""]
     head = (f"{'backend':<22}{'ticks':>6}{'model':>7}{'tasks':>7}{'asm':>7}{'solve':>8}"
             f"{'median':>8}{'p90':>8}{'p99':>8}{'max':>8}{'eq viol':>9}{'ineq viol':>10}"
-            f"{'fail':>5}{'x PlaCo':>8}")
+            f"{'fail':>5}{'x PlaCo':>8}{'cpu%':>5}")
     lines += ["Tick time [us] per backend (stage columns: medians)", head, "-" * len(head)]
     for row in report["backends"]:
         if row["skipped"]:
@@ -292,7 +302,8 @@ def format_report(report: dict[str, Any]) -> str:
             f"{_fmt(st['assembly']):>7}{_fmt(st['solve']):>8}{_fmt(row['median_us']):>8}"
             f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}{_fmt(row['max_us']):>8}"
             f"{_fmt(row['max_eq_violation'], -1):>9}{_fmt(row['max_ineq_violation'], -1):>10}"
-            f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}")
+            f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}"
+            f"{_fmt(100 * row['cpu_share']):>5}")
     lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
     head = f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}{'p99':>8}"
     lines += [head, "-" * len(head)]
@@ -399,6 +410,8 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
          "accelerations, torque limits, unilateral and friction rows), from "
          "ControlOutput.violation."),
         "Fallback ticks count in the timing statistics and as failures.",
+        ("cpu%: the process's CPU time over the episode's wall time; well below 100, other "
+         "processes shared the cores and the p90-max columns measure their preemptions."),
         ("Before the first row, one short episode of the default controller warms the process "
          "up (imports, caches) and is discarded. Times depend on the machine's load."),
         ("Scaling: the WholeBodyController QP has a fixed size whatever the contacts (a swing "
