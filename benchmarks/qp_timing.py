@@ -343,7 +343,7 @@ def plot(report: dict[str, Any], path: Path) -> None:
         right.barh(range(len(rows)), values, left=bottom, label=stage)
         bottom += values
     right.set_yticks(range(len(rows)), [r["name"] for r in rows])
-    right.set_xlabel("median stage time [us] (stacked; PlaCo: model + solve)")
+    right.set_xlabel("median stage time [us] (stacked; stages a controller reports)")
     right.legend(loc="lower right")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -403,8 +403,10 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
     notes = [
         (f"The first {WARMUP_TICKS} ticks (standing, before the lift) of every episode are "
          "warm-up and excluded from every statistic."),
-        ("Stage columns: WholeBodyController's model/tasks/assembly/solve; PlaCo reports model "
-         "(update_kinematics) and solve (its task update, assembly and QP together)."),
+        ("Stage columns: medians of the stages ControlOutput.timings reports, '-' where a "
+         "controller reports none (WholeBodyController may compute its task terms inside "
+         "'assembly'; PlaCo's model is update_kinematics, its solve the task update, assembly "
+         "and QP together)."),
         ("Violations: WholeBodyController's last_solution checked with problem.violations() "
          "right after each step; PlaCo's are its hard rows (floating-base torque, stance-foot "
          "accelerations, torque limits, unilateral and friction rows), from "

@@ -44,6 +44,7 @@ def test_stands_two_seconds_in_mujoco(standing, description):
     # The four QP forces carry the robot's weight.
     total = out.forces[:, 2].sum()
     assert total == pytest.approx(description.total_mass * 9.81, rel=0.02)
+    assert np.linalg.norm(controller.com_velocity()) < 0.01
     assert set(out.timings) == {"model", "solve", "total"}
     eq, ineq = out.violation
     assert eq < 1e-6 and ineq < 1e-6
@@ -84,8 +85,14 @@ def test_swing_and_stance_switch_the_contact(standing):
         controller.set_swing("RL")
     with pytest.raises(ConfigurationError, match="FR is in swing"):
         controller.set_max_normal_force("FR", 10.0)
+    far = controller.shoulder_position("FR") + [0.0, 0.0, 0.5]
     with pytest.raises(ReachabilityError, match="reachable: at most 0.40 m"):
-        controller.set_foot_target("FR", controller.shoulder_position("FR") + [0.0, 0.0, 0.5])
+        controller.set_foot_target("FR", far)
+    controller.set_foot_target("FR", far, clamp_to_reach=True)
+    reached = np.ravel(controller.foot_tasks["FR"].target_world) - controller.shoulder_position("FR")
+    np.testing.assert_allclose(reached, [0.0, 0.0, 0.40], atol=1e-12)
+    safe = controller.safe_command(v, "guard tripped")
+    assert safe.status is ControlStatus.FALLBACK and safe.message == "guard tripped"
     controller.set_stance("FR", max_normal_force_n=0.0)
     assert controller.contacts["FR"].active and controller.max_normal_force("FR") == 0.0
     assert controller.support_legs() == ["FL", "RL", "RR"]

@@ -221,6 +221,10 @@ class PlacoController:
         """Centre of mass [m] at the last state."""
         return np.array(self.robot.com_world(), dtype=float).reshape(3)
 
+    def com_velocity(self) -> np.ndarray:
+        """Centre-of-mass velocity [m/s] at the last state."""
+        return np.asarray(self.robot.com_jacobian() @ self.robot.state.qd, dtype=float).reshape(3)
+
     def foot_position(self, leg: str) -> np.ndarray:
         """World position [m] of a foot frame (sphere centre) at the last state."""
         check_name("leg", leg, LEGS)
@@ -239,10 +243,12 @@ class PlacoController:
 
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
-                        acceleration: np.ndarray | None = None) -> None:
+                        acceleration: np.ndarray | None = None, *,
+                        clamp_to_reach: bool = False) -> None:
         """World target [m], velocity [m/s] and feed-forward acceleration of a foot.
 
-        Tracked while the leg swings.
+        Tracked while the leg swings. With ``clamp_to_reach`` a target beyond the leg's
+        reach is moved onto it instead of raising.
 
         Raises:
             ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
@@ -251,8 +257,11 @@ class PlacoController:
         check_name("leg", leg, LEGS)
         position = as_vector(f"{leg}_foot target", position, 3)
         if self._q is not None:
-            distance = float(np.linalg.norm(position - self.shoulder_position(leg)))
-            if distance > LEG_REACH_M:
+            shoulder = self.shoulder_position(leg)
+            distance = float(np.linalg.norm(position - shoulder))
+            if distance > LEG_REACH_M and clamp_to_reach:
+                position = shoulder + (position - shoulder) * (LEG_REACH_M / distance)
+            elif distance > LEG_REACH_M:
                 raise ReachabilityError(
                     f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
                     f"the {leg} shoulder; reachable: at most {LEG_REACH_M:.2f} m"
@@ -409,6 +418,10 @@ class PlacoController:
             if not self._stance[leg]:
                 errors[f"{leg}_foot"] = float(np.linalg.norm(self.foot_tasks[leg].error))
         return errors
+
+    def safe_command(self, v: np.ndarray, message: str) -> ControlOutput:
+        """The safe fallback command for velocity ``v``, with status FALLBACK and ``message``."""
+        return self._fallback(v, message, time.perf_counter())
 
     def _fallback(self, v: np.ndarray, message: str, t0: float) -> ControlOutput:
         """Safe command: the last good torques with joint damping, inside the limits."""
