@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml scripts/setup.sh
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/go2-wbc stand-pd
+	$(BIN)/go2-wbc high-five
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

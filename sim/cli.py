@@ -1,11 +1,463 @@
-"""The ``go2-wbc`` command line."""
+"""The ``go2-wbc`` command line: an action client that drives a simulated GO2."""
 
 from __future__ import annotations
 
 import argparse
+import ctypes.util
+import dataclasses
+import json
+import math
+import os
 import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
+
+# actions/ and wbc/ never import mujoco, so these are safe before MUJOCO_GL is chosen.
+from actions.go2_actions import (
+    FOLLOW_JOINT_TRAJECTORY_ACTION,
+    HIGH_FIVE_ACTION,
+    SIT_ACTION,
+    STAND_ACTION,
+)
+from actions.high_five_behaviour import MAX_HOLD_S, PHASE_NAMES
+from actions.messages import (
+    Duration,
+    FollowJointTrajectoryGoal,
+    HighFiveGoal,
+    JointTolerance,
+    JointTrajectory,
+    JointTrajectoryPoint,
+    SitGoal,
+    StandGoal,
+)
+from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
+from wbc.description import JOINT_NAMES, LEGS
+from wbc.errors import ConfigurationError
+from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M, LiftPhase
+
+if TYPE_CHECKING:
+    from actions.client_goal_handle import ClientGoalHandle
+    from sim.control_loop import ControlLoop
+    from sim.simulator import Go2Simulator
+    from wbc.control_output import ControlOutput
+
+#: Exit codes.
+EXIT_SUCCEEDED, EXIT_NOT_SUCCEEDED, EXIT_USAGE, EXIT_REJECTED, EXIT_UNAVAILABLE = 0, 1, 2, 3, 4
+EXIT_INTERRUPTED = 130
+
+#: The foot a HighFive goal raises.
+RAISED_LEG = "FR"
+#: Feedback phases in which the raised foot follows a target (raising, holding, lowering).
+TRACKING_PHASES = frozenset(
+    PHASE_NAMES[p] for p in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING)
+)
+#: Sim time [s] between refreshes of the progress line on a terminal.
+PROGRESS_REFRESH_S = 0.25
+#: Sim time [s] a goal may run beyond its expected duration before the CLI gives up on it.
+GOAL_SLACK_S = 30.0
+#: Sim time [s] the robot stands before the goal is sent. The plant is spawned at the pose
+#: without contact forces; its feet settle (and slide ~3 mm) in the first 20 ms.
+SETTLE_S = 0.3
+
+EXIT_CODES_HELP = """\
+exit status:
+    0  the goal SUCCEEDED
+    1  the goal ended CANCELED or ABORTED (or did not end in time)
+    2  bad arguments (the message names the option and what is valid)
+    3  the action server rejected the goal (the reason is printed)
+    4  cannot run here (action not served, no offscreen rendering for --video)
+  130  interrupted: Ctrl-C cancels the goal and waits for the robot to unwind
+"""
+
+EXAMPLES_HELP = """\
+examples:
+  go2-wbc high-five                         # 0.40 m, hold 2 s, headless
+  go2-wbc high-five --height 0.3 --hold 0 --metrics
+  go2-wbc high-five --video hf.mp4 --plot hf.png --report hf.json --log hf.npz
+  go2-wbc high-five --push 40,0.1 --push-at 3 --push-dir 90
+  go2-wbc high-five --cancel-at 2.5         # ends CANCELED with the foot down
+  go2-wbc stand; go2-wbc sit --duration 1.5
+  go2-wbc trajectory wave.yaml              # format: go2-wbc trajectory --help
+
+"""
+
+TRAJECTORY_FORMAT_HELP = """\
+trajectory file (YAML, or JSON with a .json suffix; same keys):
+  joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]   # any of the 12 joints
+  points:                              # in time order
+    - positions: [0.0, 0.67, -1.3]     # [rad], one per joint name
+      velocities: [0.0, 0.0, 0.0]      # optional [rad/s]
+      accelerations: [0.0, 0.0, 0.0]   # optional [rad/s^2]
+      time_from_start: 1.5             # [s] from the start of the goal
+  path_tolerance:                      # optional, per joint, during the motion
+    - {name: FR_thigh_joint, position: 0.2}        # [rad]; 0 = server default, -1 = none
+  goal_tolerance:                      # optional, per joint, at the end
+    - {name: FR_thigh_joint, position: 0.02, velocity: 0.1}   # [rad], [rad/s]
+  goal_time_tolerance: 0.5             # optional [s] after the last point
+A file that cannot be read or does not have this shape is a usage error (exit 2);
+joint names, lengths and times are judged by the action server (a rejection is exit 3).
+"""
+
+
+# --------------------------------------------------------------------------- argument types
+
+
+def _number(text: str, expected: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}")
+    return value
+
+
+def _float_in(low: float, high: float, *, what: str, unit: str, fmt: str = ".2f"
+              ) -> Callable[[str], float]:
+    """An argparse type: a finite number in ``[low, high]``; the message says the range."""
+    expected = f"{what} in [{low:{fmt}}, {high:{fmt}}] {unit}".rstrip()
+
+    def parse(text: str) -> float:
+        value = _number(text, expected)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {expected}, received {text}")
+        return value
+
+    return parse
+
+
+def _whole_in(low: int, high: int, *, what: str) -> Callable[[str], int]:
+    """An argparse type: an integer in ``[low, high]``."""
+    expected = f"{what} in [{low}, {high}]"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {expected}, received {text}")
+        return value
+
+    return parse
+
+
+@dataclass(frozen=True)
+class Push:
+    """A horizontal push on the base: ``force_n`` [N] for ``duration_s`` [s]."""
+
+    force_n: float
+    duration_s: float
+
+
+def _push(text: str) -> Push:
+    expected = "FORCE_N,DURATION_S with a force in [0, 500] N and a duration in (0, 5] s"
+    parts = text.split(",")
+    try:
+        force, duration = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected {expected} (e.g. 40,0.1), received {text!r}") from None
+    if not (0.0 <= force <= 500.0 and 0.0 < duration <= 5.0):
+        raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}")
+    return Push(force, duration)
+
+
+def _video_size(text: str) -> tuple[int, int]:
+    expected = "WIDTHxHEIGHT in pixels, both even and in [16, 3840] (e.g. 640x480)"
+    try:
+        width, height = (int(p) for p in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}") from None
+    if not all(16 <= n <= 3840 and n % 2 == 0 for n in (width, height)):
+        raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}")
+    return width, height
+
+
+def _output(*suffixes: str) -> Callable[[str], Path]:
+    """An argparse type: a file path with one of ``suffixes`` in an existing directory."""
+    def parse(text: str) -> Path:
+        path = Path(text)
+        if path.suffix.lower() not in suffixes:
+            raise argparse.ArgumentTypeError(
+                f"expected a file name ending in {' or '.join(suffixes)}, received {text!r}")
+        if not path.parent.is_dir():
+            raise argparse.ArgumentTypeError(
+                f"directory {str(path.parent)!r} does not exist (for {text!r})")
+        return path
+
+    return parse
+
+
+def _trajectory_file(text: str) -> FollowJointTrajectoryGoal:
+    try:
+        return load_trajectory_goal(Path(text))
+    except OSError as err:
+        raise argparse.ArgumentTypeError(
+            f"cannot read {text!r}: {err.strerror or err}") from None
+    except (ValueError, ConfigurationError) as err:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a valid trajectory file: {err}") from None
+
+
+# --------------------------------------------------------------------------- trajectory files
+
+_GOAL_KEYS = ("joint_names", "points", "path_tolerance", "goal_tolerance", "goal_time_tolerance")
+_POINT_KEYS = ("positions", "velocities", "accelerations", "effort", "time_from_start")
+_TOLERANCE_KEYS = ("name", "position", "velocity", "acceleration")
+
+
+def _mapping(value: Any, where: str, keys: Sequence[str], required: Sequence[str]
+             ) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ConfigurationError(f"{where}: expected a mapping with keys {', '.join(keys)}, "
+                                 f"received {type(value).__name__}")
+    unknown = sorted(set(value) - set(keys))
+    if unknown:
+        raise ConfigurationError(f"{where}: unknown key {unknown[0]!r}; valid keys: "
+                                 f"{', '.join(keys)}")
+    missing = [k for k in required if k not in value]
+    if missing:
+        raise ConfigurationError(f"{where}: missing key {missing[0]!r}")
+    return value
+
+
+def _list(value: Any, where: str) -> list[Any]:
+    if not isinstance(value, list):
+        raise ConfigurationError(f"{where}: expected a list, received {type(value).__name__}")
+    return value
+
+
+def _seconds(value: Any, where: str) -> Duration:
+    if isinstance(value, dict):
+        return Duration(**_mapping(value, where, ("sec", "nanosec"), ()))
+    return Duration.coerce(value, where)
+
+
+def load_trajectory_goal(path: Path) -> FollowJointTrajectoryGoal:
+    """Build a FollowJointTrajectory goal from a YAML or JSON file (format: ``--help``).
+
+    Raises:
+        OSError: The file cannot be read.
+        ValueError: It is not valid YAML/JSON.
+        ConfigurationError: It does not have the expected keys and types.
+    """
+    text = path.read_text(encoding="utf-8")
+    if path.suffix.lower() == ".json":
+        data = json.loads(text)
+    else:
+        import yaml
+
+        try:
+            data = yaml.safe_load(text)
+        except yaml.MarkedYAMLError as err:
+            mark = err.problem_mark
+            where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "?"
+            raise ValueError(f"YAML error at {where}: {err.problem}") from None
+        except yaml.YAMLError as err:
+            raise ValueError(f"YAML error: {err}") from None
+    data = _mapping(data, "file", _GOAL_KEYS, ("joint_names", "points"))
+    points = []
+    for i, raw in enumerate(_list(data["points"], "points")):
+        where = f"points[{i}]"
+        point = dict(_mapping(raw, where, _POINT_KEYS, ("positions", "time_from_start")))
+        point["time_from_start"] = _seconds(point["time_from_start"],
+                                            f"{where}.time_from_start")
+        try:
+            points.append(JointTrajectoryPoint(**point))
+        except ConfigurationError as err:
+            raise ConfigurationError(f"{where}: {err}") from None
+    tolerances = {}
+    for key in ("path_tolerance", "goal_tolerance"):
+        tolerances[key] = [
+            JointTolerance(**_mapping(t, f"{key}[{i}]", _TOLERANCE_KEYS, ("name",)))
+            for i, t in enumerate(_list(data.get(key, []), key))
+        ]
+    return FollowJointTrajectoryGoal(
+        trajectory=JointTrajectory(joint_names=data["joint_names"], points=points),
+        goal_time_tolerance=_seconds(data.get("goal_time_tolerance", 0.0),
+                                     "goal_time_tolerance"),
+        **tolerances,
+    )
+
+
+# --------------------------------------------------------------------------- the parser
+
+
+class _Parser(argparse.ArgumentParser):
+    """Reports a usage error on one line, naming the option: ``--height: expected ...``."""
+
+    def error(self, message: str) -> NoReturn:
+        message = message.removeprefix("argument ")
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def _run_options() -> argparse.ArgumentParser:
+    """Options shared by every goal-sending subcommand."""
+    common = _Parser(add_help=False)
+    run = common.add_argument_group("simulation")
+    sim_time = _float_in(0.0, 3600.0, what="a sim time", unit="s", fmt="g")
+    run.add_argument("--realtime", action="store_true",
+                     help="pace the simulation to the wall clock (default: as fast as possible)")
+    run.add_argument("--viewer", action="store_true",
+                     help="open the MuJoCo viewer (implies --realtime); without a display "
+                          "($DISPLAY or $WAYLAND_DISPLAY) it says so and runs headless "
+                          "(default: headless)")
+    run.add_argument("--start-pose", choices=("standing", "lying"), default=None,
+                     help="pose the robot starts in (default: lying for 'stand', "
+                          "standing otherwise)")
+    run.add_argument("--cancel-at", type=sim_time, metavar="SECONDS",
+                     help="cancel the goal at this simulated time [s]; the robot stands "
+                          f"{SETTLE_S:g} s before the goal is sent (default: never)")
+    run.add_argument("--push", type=_push, metavar="FORCE_N,DURATION_S",
+                     help="push the base horizontally with FORCE_N [N] for DURATION_S [s] "
+                          "(default: no push)")
+    run.add_argument("--push-at", type=sim_time, metavar="SECONDS",
+                     help="simulated time [s] the push starts (default: 3.5, during the "
+                          "hold of a high five; goals are sent at 0.3 s)")
+    run.add_argument("--push-dir", type=_float_in(-360.0, 360.0, what="an angle", unit="deg",
+                                                  fmt="g"),
+                     metavar="DEGREES",
+                     help="push direction [deg] relative to the robot's heading: 0 forward, "
+                          "90 left, 180 backward, 270 right (default: 90)")
+    out = common.add_argument_group("outputs")
+    out.add_argument("--metrics", action="store_true",
+                     help="measure the run (raised-foot tracking, stance sliding, CoM margin, "
+                          "tilt, torques, QP failures, tick times) and print a summary; "
+                          "implied by --report (default: off: measuring takes about as long "
+                          "as controlling)")
+    out.add_argument("--video", type=_output(".mp4"), metavar="FILE.mp4",
+                     help="record an MP4 from a camera tracking the robot, rendered offscreen "
+                          "(works without a display or GPU; default: none)")
+    out.add_argument("--fps", type=_whole_in(1, 240, what="frames per second"), default=None,
+                     metavar="N", help="video frame rate [1/s] of simulated time (default: 30)")
+    out.add_argument("--video-size", type=_video_size, default=None, metavar="WxH",
+                     help="video frame size in pixels (default: 640x480)")
+    out.add_argument("--plot", type=_output(".png", ".pdf", ".svg"), metavar="FILE.png",
+                     help="plot raised-foot height vs target, CoM margin to the support edge, "
+                          "FR normal force and control tick time against sim time "
+                          "(default: none)")
+    out.add_argument("--report", type=_output(".json"), metavar="FILE.json",
+                     help="write the result, the feedback with sim times and the run metrics "
+                          "(default: none)")
+    out.add_argument("--log", type=_output(".npz"), metavar="FILE.npz",
+                     help="write per-tick arrays: t_s, q, v (Pinocchio convention, "
+                          "joint_names beside), tau, raised-foot target and position, phase, "
+                          "MuJoCo foot contact forces (4x3), CoM margin, QP status, tick time "
+                          "(default: none)")
+    return common
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``go2-wbc`` argument parser."""
+    parser = _Parser(
+        prog="go2-wbc",
+        description="Send an action goal to a simulated Unitree GO2 under whole-body\n"
+                    "control and print its feedback and result, like a ROS 2 action client.",
+        epilog=EXAMPLES_HELP + EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    common = _run_options()
+
+    def add(name: str, help_text: str, epilog: str = "") -> argparse.ArgumentParser:
+        command = sub.add_parser(name, parents=[common], help=help_text,
+                                 description=help_text, epilog=epilog + EXIT_CODES_HELP,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+        command.set_defaults(parser=command)
+        return command
+
+    high_five = add(HIGH_FIVE_ACTION.replace("_", "-"),
+                    "raise the front-right foot, hold it up, put it back down")
+    high_five.add_argument(
+        "--height", type=_float_in(MIN_HEIGHT_M, MAX_HEIGHT_M, what="a height", unit="m"),
+        default=0.40, metavar="M",
+        help=f"foot height above the ground [m], in [{MIN_HEIGHT_M:.2f}, {MAX_HEIGHT_M:.2f}] "
+             "(default: 0.40)")
+    high_five.add_argument(
+        "--hold", type=_whole_in(0, MAX_HOLD_S, what="a whole number of seconds"), default=2, metavar="S",
+        help=f"seconds to hold the foot up [s], a whole number in [0, {MAX_HOLD_S}] "
+             "(default: 2)")
+    high_five.set_defaults(run=_high_five)
+
+    duration = _float_in(MIN_DURATION_S, MAX_DURATION_S, what="a duration", unit="s", fmt="g")
+    for name, verb, run in ((STAND_ACTION, "rise to the standing pose", _stand),
+                            (SIT_ACTION, "lower the body to the lying pose", _sit)):
+        pose = add(name, f"{verb} on four feet")
+        pose.add_argument("--duration", type=duration, default=2.0, metavar="S",
+                          help=f"time to reach the pose [s], in [{MIN_DURATION_S:g}, "
+                               f"{MAX_DURATION_S:g}] (default: 2.0)")
+        pose.set_defaults(run=run)
+
+    trajectory = add("trajectory", "follow a joint trajectory read from a YAML or JSON file "
+                     "(FollowJointTrajectory)", TRAJECTORY_FORMAT_HELP)
+    trajectory.add_argument("file", type=_trajectory_file, metavar="FILE",
+                            help="the trajectory file (format below)")
+    trajectory.set_defaults(run=_trajectory)
+
+    stand_pd = sub.add_parser("stand-pd", help="stand under a joint PD (baseline, no QP)",
+                              description="Stand under a joint PD with gravity compensation "
+                                          "(the baseline without the QP); print the drift.")
+    stand_pd.add_argument("--duration", type=_float_in(0.001, 60.0, what="a duration", unit="s",
+                                                       fmt="g"),
+                          default=3.0, metavar="S",
+                          help="simulated seconds [s], in [0.001, 60] (default: 3.0)")
+    stand_pd.set_defaults(run=_stand_pd)
+    return parser
+
+
+def _check_combinations(args: argparse.Namespace) -> None:
+    """Options that only make sense with another one."""
+    if not hasattr(args, "video"):
+        return
+    for option, needs in (("fps", "video"), ("video_size", "video"),
+                          ("push_at", "push"), ("push_dir", "push")):
+        if getattr(args, option) is not None and getattr(args, needs) is None:
+            args.parser.error(f"--{option.replace('_', '-')}: only used with --{needs}")
+    args.fps = args.fps or 30
+    args.video_size = args.video_size or (640, 480)
+    args.push_at = 3.5 if args.push_at is None else args.push_at
+    args.push_dir = 90.0 if args.push_dir is None else args.push_dir
+
+
+# --------------------------------------------------------------------------- subcommands
+
+
+def _high_five(args: argparse.Namespace) -> int:
+    goal = HighFiveGoal(target_height=args.height, hold_seconds=args.hold)
+    return GoalRun(args, HIGH_FIVE_ACTION, goal,
+                   f"target_height {goal.target_height:.2f} m, hold {goal.hold_seconds} s",
+                   expected_s=goal.hold_seconds + 8.0).run()
+
+
+def _stand(args: argparse.Namespace) -> int:
+    args.start_pose = args.start_pose or "lying"
+    goal = StandGoal(duration_s=args.duration)
+    return GoalRun(args, STAND_ACTION, goal, f"duration {goal.duration_s:g} s",
+                   expected_s=goal.duration_s).run()
+
+
+def _sit(args: argparse.Namespace) -> int:
+    goal = SitGoal(duration_s=args.duration)
+    return GoalRun(args, SIT_ACTION, goal, f"duration {goal.duration_s:g} s",
+                   expected_s=goal.duration_s).run()
+
+
+def _trajectory(args: argparse.Namespace) -> int:
+    goal: FollowJointTrajectoryGoal = args.file
+    points = goal.trajectory.points
+    end_s = points[-1].time_from_start.to_seconds() if points else 0.0
+    what = (f"{len(goal.trajectory.joint_names)} joint(s), {len(points)} point(s), "
+            f"{end_s:g} s")
+    names = goal.trajectory.joint_names
+    leg = names[0].split("_")[0] if names and names[0].split("_")[0] in LEGS else RAISED_LEG
+    return GoalRun(args, FOLLOW_JOINT_TRAJECTORY_ACTION, goal, what,
+                   expected_s=end_s + goal.goal_time_tolerance.to_seconds() + 3.0,
+                   trajectory_end_s=end_s, leg=leg).run()
 
 
 def _stand_pd(args: argparse.Namespace) -> int:
@@ -15,7 +467,7 @@ def _stand_pd(args: argparse.Namespace) -> int:
     sim = Go2Simulator()
     controller = JointPdController(sim.description.pose("standing"))
     z0 = sim.state()[0][2]
-    steps = int(round(args.duration / sim.timestep_s))
+    steps = round(args.duration / sim.timestep_s)
     for _ in range(steps):
         sim.step(controller.compute(*sim.state()))
     q, _ = sim.state()
@@ -23,22 +475,627 @@ def _stand_pd(args: argparse.Namespace) -> int:
     print(f"stood {sim.time_s:.2f} s under a joint PD with gravity compensation")
     print(f"base height {z0:.4f} m -> {q[2]:.4f} m; drift {np.linalg.norm(q[:2]) * 1e3:.2f} mm")
     print("foot normal forces [N]: " + ", ".join(f"{k} {v[2]:.1f}" for k, v in forces.items()))
-    return 0
+    return EXIT_SUCCEEDED
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="go2-wbc", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    stand = sub.add_parser("stand-pd", help="stand under a joint PD (baseline, no QP)")
-    stand.add_argument("--duration", type=float, default=3.0,
-                       help="simulated seconds (default: 3.0)")
-    stand.set_defaults(run=_stand_pd)
-    return parser
+# --------------------------------------------------------------------------- display helpers
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    return int(args.run(args))
+def has_display() -> bool:
+    """Whether a window can be opened ($DISPLAY or $WAYLAND_DISPLAY is set)."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def window_problem() -> str:
+    """Why the viewer's window cannot open ('' when it can)."""
+    if not has_display():
+        return "no display ($DISPLAY and $WAYLAND_DISPLAY are unset)"
+    import warnings
+
+    import glfw  # the viewer's windowing library, a dependency of mujoco
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # glfw warns, then returns False
+        if not glfw.init():
+            display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+            return f"cannot connect to the display {display!r}"
+    glfw.terminate()
+    return ""
+
+
+def choose_offscreen_gl() -> None:
+    """Pick a MuJoCo GL backend that renders without a display, before mujoco is imported.
+
+    Respects a ``MUJOCO_GL`` the user set. OSMesa (``libosmesa6``, installed by
+    ``scripts/setup.sh``) is preferred; EGL is used when only it is present.
+    """
+    if os.environ.get("MUJOCO_GL") or has_display():
+        return
+    if ctypes.util.find_library("OSMesa") or not ctypes.util.find_library("EGL"):
+        os.environ["MUJOCO_GL"] = "osmesa"
+    else:
+        os.environ["MUJOCO_GL"] = "egl"
+
+
+def _feedback_view(feedback: Any, trajectory_end_s: float | None
+                   ) -> tuple[str, float, float | None]:
+    """``(phase, progress 0..1, largest joint error [rad] or None)`` of a feedback message."""
+    if hasattr(feedback, "phase"):
+        return feedback.phase, float(feedback.progress), None
+    # FollowJointTrajectory feedback has no phase field; this server puts it in the
+    # header's frame_id. Progress is the trajectory time reached.
+    desired_s = feedback.desired.time_from_start.to_seconds()
+    progress = min(1.0, desired_s / trajectory_end_s) if trajectory_end_s else 1.0
+    error = max((abs(e) for e in feedback.error.positions), default=0.0)
+    return feedback.header.frame_id or "following", progress, error
+
+
+class FeedbackPrinter:
+    """Prints feedback: one line per phase, plus a refreshed progress line on a terminal."""
+
+    def __init__(self, stream: IO[str], *, tty: bool):
+        self.stream = stream
+        self.tty = tty
+        self.phase = ""
+        self._shown_s = -math.inf
+        self._progress_line = False
+
+    def feedback(self, now_s: float, phase: str, progress: float, detail: str) -> None:
+        """Show one feedback message received at sim time ``now_s`` [s]."""
+        text = f"[{now_s:7.3f} s] {100 * progress:4.0f} %  {phase}"
+        if detail:
+            text += f"  ({detail})"
+        if phase != self.phase:
+            self.phase = phase
+            self.line(text)
+        elif self.tty and now_s - self._shown_s >= PROGRESS_REFRESH_S - 1e-9:
+            bar = "#" * round(20 * progress)
+            self.stream.write(f"\r\033[K{text}  [{bar:<20}]")
+            self.stream.flush()
+            self._progress_line = True
+        else:
+            return
+        self._shown_s = now_s
+
+    def line(self, text: str) -> None:
+        """Print a line, replacing the progress line if one is showing."""
+        if self._progress_line:
+            self.stream.write("\r\033[K")
+            self._progress_line = False
+        self.stream.write(text + "\n")
+        self.stream.flush()
+
+
+# --------------------------------------------------------------------------- per-tick hooks
+
+
+class TickRecorder:
+    """Per-tick arrays for ``--log`` and ``--plot``: what the controller saw and did, and
+    what MuJoCo measured during the tick."""
+
+    def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG):
+        self.phase_of = phase_of
+        self.leg = leg
+        self.rows: dict[str, list[Any]] = {k: [] for k in (
+            "t_s", "q", "v", "tau", "foot_target", "foot_position", "phase",
+            "contact_forces", "com_margin_m", "qp_ok", "tick_us")}
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        from sim.episode_metrics import LOADED_FORCE_N
+        from wbc.support_polygon import SupportPolygon
+
+        sim = loop.sim
+        phase = self.phase_of()
+        # MuJoCo's contacts and positions in data are those of the tick's state (mj_step
+        # computes them before integrating), so they line up with q and v below.
+        forces = sim.foot_contact_forces()
+        feet = sim.foot_positions()
+        loaded = [feet[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_FORCE_N]
+        margin = (SupportPolygon.signed_distance(np.array(loaded), sim.data.subtree_com[1])
+                  if len(loaded) >= 3 else math.nan)
+        tracking = phase in TRACKING_PHASES
+        target = loop.controller.foot_tasks[self.leg].target if tracking else None
+        row = self.rows
+        row["t_s"].append(loop.context.now_s)
+        row["q"].append(np.array(loop.context.q))
+        row["v"].append(np.array(loop.context.v))
+        row["tau"].append(np.array(out.tau))
+        row["foot_target"].append(np.full(3, np.nan) if target is None else np.array(target))
+        row["foot_position"].append(feet[self.leg])
+        row["phase"].append(phase)
+        row["contact_forces"].append(np.array([forces[leg] for leg in LEGS]))
+        row["com_margin_m"].append(margin)
+        row["qp_ok"].append(out.ok)
+        row["tick_us"].append(out.timings.get("total", math.nan) * 1e6)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The recorded rows as arrays (N = ticks), plus the names that label them."""
+        arrays = {k: np.array(v) for k, v in self.rows.items()}
+        arrays["phase"] = np.array(self.rows["phase"], dtype=str)
+        arrays["joint_names"] = np.array(JOINT_NAMES)
+        arrays["legs"] = np.array(LEGS)
+        arrays["raised_leg"] = np.array(self.leg)
+        return arrays
+
+
+class MetricsHook:
+    """Feeds :class:`sim.episode_metrics.EpisodeMetrics` every tick."""
+
+    def __init__(self, loop: ControlLoop, phase_of: Callable[[], str], leg: str = RAISED_LEG):
+        from sim.episode_metrics import EpisodeMetrics
+
+        self.metrics = EpisodeMetrics(loop.sim, loop.controller.description.effort_limit)
+        self.phase_of = phase_of
+        self.leg = leg
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        phase = self.phase_of()
+        error = None
+        if phase in TRACKING_PHASES:
+            target = loop.controller.foot_tasks[self.leg].target
+            error = float(np.linalg.norm(loop.sim.foot_positions()[self.leg] - target))
+        self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
+                            holding=phase == PHASE_NAMES[LiftPhase.HOLDING])
+
+
+class VideoRecorder:
+    """Renders a camera tracking the base at ``fps`` frames per simulated second to an MP4."""
+
+    def __init__(self, sim: Go2Simulator, path: Path, *, fps: int, size: tuple[int, int]):
+        import imageio
+        import mujoco
+
+        width, height = size
+        vis = sim.model.vis
+        saved = (vis.global_.offwidth, vis.global_.offheight, vis.quality.offsamples,
+                 vis.quality.shadowsize)
+        vis.global_.offwidth = max(vis.global_.offwidth, width)
+        vis.global_.offheight = max(vis.global_.offheight, height)
+        if not has_display():
+            # Software GL: a 4096 px shadow map and 4x multisampling cost ~0.4 s a frame;
+            # 1024 px and none keep it near 0.1 s.
+            vis.quality.offsamples = 0
+            vis.quality.shadowsize = min(vis.quality.shadowsize, 1024)
+        try:
+            self.renderer = mujoco.Renderer(sim.model, height=height, width=width)
+        finally:
+            (vis.global_.offwidth, vis.global_.offheight, vis.quality.offsamples,
+             vis.quality.shadowsize) = saved
+        self.camera = mujoco.MjvCamera()
+        self.camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+        self.camera.trackbodyid = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "base")
+        # From behind on the right, looking down enough to keep the (black) sky out of view.
+        self.camera.distance, self.camera.azimuth, self.camera.elevation = 1.5, 60.0, -25.0
+        self.sim = sim
+        self.period_s = 1.0 / fps
+        self.next_s = sim.time_s
+        self.frames = 0
+        self.writer = imageio.get_writer(path, fps=fps, codec="libx264", quality=7,
+                                         macro_block_size=2)
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        if self.sim.time_s + 1e-9 < self.next_s:
+            return
+        self.next_s += self.period_s
+        self.renderer.update_scene(self.sim.data, self.camera)
+        self.writer.append_data(self.renderer.render())
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finish the file and free the GL context."""
+        self.writer.close()
+        self.renderer.close()
+
+
+class ViewerHook:
+    """Keeps a passive MuJoCo viewer in sync, about 60 times a simulated second."""
+
+    def __init__(self, sim: Go2Simulator):
+        import mujoco.viewer
+
+        self.handle = mujoco.viewer.launch_passive(sim.model, sim.data, show_left_ui=False,
+                                                   show_right_ui=False)
+        self.sim = sim
+        self.next_s = 0.0
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        if self.sim.time_s >= self.next_s and self.handle.is_running():
+            self.handle.sync()
+            self.next_s = self.sim.time_s + 1.0 / 60.0
+
+    def close(self) -> None:
+        """Close the window."""
+        self.handle.close()
+
+
+class Pacer:
+    """Sleeps so that simulated time does not run ahead of the wall clock (``--realtime``)."""
+
+    def __init__(self, sim: Go2Simulator):
+        self.sim = sim
+        self.start_wall = time.perf_counter()
+        self.start_sim = sim.time_s
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        ahead = (self.sim.time_s - self.start_sim) - (time.perf_counter() - self.start_wall)
+        if ahead > 2e-3:  # below the sleep granularity, catch up on a later tick
+            time.sleep(ahead)
+
+
+class _Timed:
+    """Wraps a hook and adds the wall time it takes to ``totals[0]``."""
+
+    def __init__(self, hook: Callable[[ControlLoop, ControlOutput], None], totals: list[float]):
+        self.hook, self.totals = hook, totals
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        start = time.perf_counter()
+        self.hook(loop, out)
+        self.totals[0] += time.perf_counter() - start
+
+
+# --------------------------------------------------------------------------- one goal
+
+
+@dataclass
+class _Event:
+    t_s: float
+    event: str
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"t_s": round(self.t_s, 4), "event": self.event, **self.details}
+
+
+class GoalRun:
+    """Sends one goal to a fresh simulated GO2, spins until it ends, writes the outputs.
+
+    Args:
+        args: The parsed options (outputs, pushes, cancel time, pacing).
+        action_name: The action server to send the goal to.
+        goal: The goal message.
+        goal_text: How to print the goal.
+        expected_s: How long the goal should take [s] (the CLI gives up
+            :data:`GOAL_SLACK_S` later).
+        trajectory_end_s: Time of a trajectory's last point [s] (its feedback's progress).
+        leg: The leg whose foot is plotted and logged (the one that moves).
+        stream: Where to print (standard output by default).
+    """
+
+    def __init__(self, args: argparse.Namespace, action_name: str, goal: Any, goal_text: str,
+                 *, expected_s: float, trajectory_end_s: float | None = None,
+                 leg: str = RAISED_LEG, stream: IO[str] | None = None):
+        self.args = args
+        self.action_name = action_name
+        self.goal = goal
+        self.goal_text = goal_text
+        self.deadline_s = expected_s + GOAL_SLACK_S
+        self.trajectory_end_s = trajectory_end_s
+        self.leg = leg
+        self.stream = stream or sys.stdout
+        self.printer = FeedbackPrinter(self.stream, tty=self.stream.isatty())
+        self.phase = ""
+        self.max_error = 0.0
+        self.feedback: list[dict[str, Any]] = []
+        self.events: list[_Event] = []
+        self.handle: ClientGoalHandle | None = None
+        #: Wall time [s] spent measuring, recording, rendering, in the viewer and sleeping:
+        #: left out of the real-time factor, which is that of simulation and control.
+        self.overhead_s = [0.0]
+        self.result: dict[str, Any] | None = None
+        self.summary: Any = None
+        self.recorder: TickRecorder | None = None
+        self.video: VideoRecorder | None = None
+        self.wall_start = time.perf_counter()
+        self.wall_s = 0.0
+
+    def say(self, text: str) -> None:
+        """One line of output (replacing the progress line)."""
+        self.printer.line(text)
+
+    def run(self) -> int:
+        """Run the goal; return the exit code."""
+        args = self.args
+        if args.video is not None:
+            choose_offscreen_gl()
+        problem = window_problem() if args.viewer else ""
+        viewer = args.viewer and not problem
+        if problem:
+            print(f"go2-wbc: --viewer: {problem}; running headless", file=sys.stderr)
+        from sim.control_loop import ControlLoop
+
+        loop = ControlLoop.simulated(pose=args.start_pose or "standing")
+        loop.spin_for(SETTLE_S)
+        if self.action_name not in loop.runner.server_names:
+            print(f"go2-wbc: the '{self.action_name}' action is not served by this version "
+                  f"(served: {', '.join(loop.runner.server_names)})", file=sys.stderr)
+            return EXIT_UNAVAILABLE
+        closers: list[Callable[[], None]] = []
+        try:
+            code = self._attach_hooks(loop, viewer, closers)
+            if code is None:
+                code = self._spin(loop)
+        finally:
+            for close in closers:
+                close()
+        self._write_outputs()
+        return code
+
+    def _attach_hooks(self, loop: ControlLoop, viewer: bool,
+                      closers: list[Callable[[], None]]) -> int | None:
+        args = self.args
+        self.metrics = None
+        if args.metrics or args.report is not None:
+            self.metrics = MetricsHook(loop, lambda: self.phase, self.leg)
+            loop.hooks.append(_Timed(self.metrics, self.overhead_s))
+        if args.log or args.plot:
+            self.recorder = TickRecorder(lambda: self.phase, self.leg)
+            loop.hooks.append(_Timed(self.recorder, self.overhead_s))
+        if args.video is not None:
+            try:
+                video = VideoRecorder(loop.sim, args.video, fps=args.fps, size=args.video_size)
+            except Exception as err:  # noqa: BLE001 - GL backends fail in assorted types
+                print(f"go2-wbc: --video: offscreen rendering is unavailable "
+                      f"(MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}): "
+                      f"{' '.join(str(err).split())}. Install libosmesa6 "
+                      "(apt-get install libosmesa6) or set MUJOCO_GL=egl", file=sys.stderr)
+                return EXIT_UNAVAILABLE
+            closers.append(video.close)
+            loop.hooks.append(_Timed(video, self.overhead_s))
+            self.video = video
+        if viewer:
+            try:
+                view = ViewerHook(loop.sim)
+            except Exception as err:  # noqa: BLE001 - GLFW and X fail in assorted types
+                print(f"go2-wbc: --viewer: cannot open a window ({' '.join(str(err).split())}); "
+                      "running headless", file=sys.stderr)
+            else:
+                closers.append(view.close)
+                loop.hooks.append(_Timed(view, self.overhead_s))
+        if args.realtime or viewer:
+            loop.hooks.append(_Timed(Pacer(loop.sim), self.overhead_s))
+        return None
+
+    # -- the action client -----------------------------------------------------------------
+
+    def _on_feedback(self, message: Any) -> None:
+        now_s = self.loop.context.now_s
+        phase, progress, error = _feedback_view(message.feedback, self.trajectory_end_s)
+        self.phase = phase
+        entry = {"t_s": round(now_s, 4), "phase": phase, "progress": round(progress, 4)}
+        detail = ""
+        if error is not None:
+            entry["max_joint_error_rad"] = round(error, 5)
+            self.max_error = max(self.max_error, error)
+            detail = f"largest joint error so far {self.max_error:.4f} rad"
+        self.feedback.append(entry)
+        self.printer.feedback(now_s, phase, progress, detail)
+
+    def _spin(self, loop: ControlLoop) -> int:
+        self.loop = loop
+        client = loop.client(self.action_name)
+        self.say(f"[{loop.robot.time_s:7.3f} s] {self.action_name}: sending goal "
+                 f"({self.goal_text})")
+        self.wall_start = time.perf_counter()
+        handle_future = client.send_goal_async(self.goal, feedback_callback=self._on_feedback)
+        # Called in the tick that decides, before that tick's feedback.
+        handle_future.add_done_callback(self._on_goal_response)
+        try:
+            while not handle_future.done():
+                loop.spin_once()
+            self.handle = handle = handle_future.result()
+            if not handle.accepted:
+                return EXIT_REJECTED
+            result_future = handle.get_result_async()
+            while not result_future.done():
+                self._scheduled(loop, handle)
+                loop.spin_once()
+        except KeyboardInterrupt:
+            return self._interrupted(loop)
+        self.wall_s = time.perf_counter() - self.wall_start
+        return self._finish(result_future.result())
+
+    def _on_goal_response(self, future: Any) -> None:
+        handle, now = future.result(), self.loop.context.now_s
+        if handle.accepted:
+            self._event("accepted")
+            self.say(f"[{now:7.3f} s] goal accepted")
+            return
+        rejection = handle.rejection
+        self.say(f"[{now:7.3f} s] goal rejected (code {rejection.code}): {rejection.message}")
+        self.result = {"status": "REJECTED", "success": False, "message": rejection.message,
+                       "rejection_code": rejection.code}
+
+    def _scheduled(self, loop: ControlLoop, handle: ClientGoalHandle) -> None:
+        """The cancel and the push, at their sim times; give up on a goal that overruns."""
+        args, now = self.args, loop.robot.time_s
+        if args.cancel_at is not None and now >= args.cancel_at - 1e-9 and not self._done(
+                "cancel_requested"):
+            self._cancel(handle, "cancel_requested", f"--cancel-at {args.cancel_at:g}")
+        if args.push is not None and now >= args.push_at - 1e-9 and not self._done("push"):
+            q = loop.context.q
+            x, y, z, w = q[3:7]
+            heading = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+            angle = heading + math.radians(args.push_dir)
+            force = [args.push.force_n * math.cos(angle), args.push.force_n * math.sin(angle),
+                     0.0]
+            loop.sim.apply_force(force, args.push.duration_s, body="base")
+            self._event("push", now, force_n=[round(f, 3) for f in force],
+                        duration_s=args.push.duration_s, direction_deg=args.push_dir)
+            self.say(f"[{now:7.3f} s] push: {args.push.force_n:g} N at {args.push_dir:g} deg "
+                     f"for {args.push.duration_s:g} s")
+        if now > self.deadline_s and not self._done("timeout"):
+            self._cancel(handle, "timeout", f"no result after {now:.1f} s of sim time")
+
+    def _cancel(self, handle: ClientGoalHandle, event: str, reason: str) -> None:
+        now = self.loop.robot.time_s  # the request is handled on the next tick, at this time
+        self._event(event, now, reason=reason)
+        self.say(f"[{now:7.3f} s] canceling the goal ({reason})")
+
+        def replied(future: Any) -> None:
+            response = future.result()
+            self.say(f"[{self.loop.context.now_s:7.3f} s] cancel "
+                     f"{'accepted' if response.accepted else 'refused'}: {response.message}")
+
+        handle.cancel_goal_async().add_done_callback(replied)
+
+    def _interrupted(self, loop: ControlLoop) -> int:
+        """Ctrl-C: cancel the goal and let the robot unwind (a second Ctrl-C stops at once)."""
+        if self.handle is None or not self.handle.accepted:
+            return EXIT_INTERRUPTED
+        self._cancel(self.handle, "interrupted", "Ctrl-C")
+        result_future = self.handle.get_result_async()
+        end = loop.robot.time_s + GOAL_SLACK_S
+        while not result_future.done() and loop.robot.time_s < end:
+            loop.spin_once()
+        self.wall_s = time.perf_counter() - self.wall_start
+        if result_future.done():
+            self._finish(result_future.result())
+        return EXIT_INTERRUPTED
+
+    def _finish(self, wrapped: Any) -> int:
+        result = wrapped.result
+        error_code = getattr(result, "error_code", 0)
+        success = bool(getattr(result, "success", error_code == 0))
+        success = success and wrapped.status.name == "SUCCEEDED"
+        message = getattr(result, "message", None) or getattr(result, "error_string", "")
+        self.result = {"status": wrapped.status.name, "success": success, "message": message}
+        if hasattr(result, "error_code"):
+            self.result["error_code"] = error_code
+        self._event("result", status=wrapped.status.name)
+        self.say(f"[{self.loop.context.now_s:7.3f} s] result: {wrapped.status.name}"
+                 + (f": {message}" if message else ""))
+        if self.metrics is not None:
+            self.summary = self.metrics.metrics.summary(
+                max(self.wall_s - self.overhead_s[0], 1e-9))
+            self.say(_metrics_text(self.summary, raised=self.action_name == HIGH_FIVE_ACTION))
+        return EXIT_SUCCEEDED if success else EXIT_NOT_SUCCEEDED
+
+    def _event(self, name: str, t_s: float | None = None, **details: Any) -> None:
+        """Record an event at ``t_s`` [s] (default: the last tick's time)."""
+        when = self.loop.context.now_s if t_s is None else t_s
+        self.events.append(_Event(when, name, details))
+
+    def _done(self, name: str) -> bool:
+        return any(e.event == name for e in self.events)
+
+    # -- outputs ---------------------------------------------------------------------------
+
+    def _write_outputs(self) -> None:
+        args = self.args
+        if self.video is not None:
+            self.say(f"wrote {args.video} ({self.video.frames} frames at {args.fps} fps)")
+        if args.report is not None and self.result is not None:
+            args.report.write_text(json.dumps(self._report(), indent=2) + "\n", encoding="utf-8")
+            self.say(f"wrote {args.report}")
+        if self.recorder is not None and self.result is not None and self.result["status"] != (
+                "REJECTED"):
+            arrays = self.recorder.arrays()
+            if args.log is not None:
+                np.savez_compressed(args.log, **arrays)
+                self.say(f"wrote {args.log} ({len(arrays['t_s'])} ticks)")
+            if args.plot is not None:
+                write_plot(args.plot, arrays, title=f"{self.action_name} ({self.goal_text})")
+                self.say(f"wrote {args.plot}")
+
+    def _report(self) -> dict[str, Any]:
+        phases = []
+        for entry in self.feedback:
+            if not phases or phases[-1]["phase"] != entry["phase"]:
+                phases.append({"phase": entry["phase"], "t_s": entry["t_s"]})
+        return {
+            "action": self.action_name,
+            "goal": dataclasses.asdict(self.goal),
+            "start_pose": self.args.start_pose or "standing",
+            "result": self.result,
+            "phases": phases,
+            "events": [e.as_dict() for e in self.events],
+            "feedback": self.feedback,
+            "metrics": None if self.summary is None else self.summary.as_dict(),
+            "wall_time_s": round(self.wall_s, 3),
+        }
+
+
+def _metrics_text(summary: Any, *, raised: bool) -> str:
+    s = summary
+    parts = []
+    if raised:
+        parts.append(f"raised foot error RMS {s.raised_foot_rms_mm:.1f} mm "
+                     f"(max {s.raised_foot_max_mm:.1f} mm)")
+    parts += [f"stance sliding max {s.stance_sliding_max_mm:.2f} mm",
+              f"min CoM margin {s.min_com_margin_mm:.0f} mm",
+              f"max tilt {s.max_base_tilt_deg:.1f} deg",
+              f"QP failures {s.qp_failures}",
+              f"tick median {s.tick_median_us:.0f} us (p99 {s.tick_p99_us:.0f} us)",
+              f"real-time factor {s.real_time_factor:.2f}"]
+    return "metrics: " + "; ".join(parts)
+
+
+# --------------------------------------------------------------------------- the plot
+
+
+def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None:
+    """Raised-foot height vs target, CoM margin, FR normal force and tick time vs sim time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    t = arrays["t_s"]
+    leg = str(arrays["raised_leg"])
+    fr = list(arrays["legs"]).index("FR")
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5), layout="constrained")
+    ax = axes[0]
+    ax.plot(t, arrays["foot_position"][:, 2], label=f"{leg} foot (MuJoCo)")
+    ax.plot(t, arrays["foot_target"][:, 2], "--", label="target")
+    ax.set_ylabel("foot height [m]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[1]
+    ax.plot(t, arrays["com_margin_m"] * 1e3)
+    ax.axhline(0.0, color="tab:red", lw=0.8, ls=":", label="support edge")
+    ax.set_ylabel("CoM margin [mm]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[2]
+    ax.plot(t, arrays["contact_forces"][:, fr, 2])
+    ax.set_ylabel("FR normal force [N]")
+    ax = axes[3]
+    ax.plot(t, arrays["tick_us"], lw=0.5)
+    ax.axhline(1e3, color="tab:red", lw=0.8, ls=":", label="1 kHz period")
+    ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others
+    ax.set_ylabel("control tick [us]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel("sim time [s]")
+    # Shade the phases.
+    phases = arrays["phase"]
+    starts = [0] + [i for i in range(1, len(phases)) if phases[i] != phases[i - 1]]
+    colours: dict[str, Any] = {}
+    palette = plt.get_cmap("Pastel1").colors + plt.get_cmap("Pastel2").colors
+    for k, start in enumerate(starts):
+        end = starts[k + 1] if k + 1 < len(starts) else len(t) - 1
+        name = str(phases[start]) or "(waiting)"
+        colour = colours.setdefault(name, palette[len(colours) % len(palette)])
+        for ax in axes:
+            ax.axvspan(t[start], t[end], color=colour, alpha=0.6, lw=0, zorder=0)
+    fig.legend(handles=[Patch(color=c, label=n) for n, c in colours.items()],
+               loc="outside lower center", ncols=min(len(colours), 6), fontsize=8)
+    fig.suptitle(title)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --------------------------------------------------------------------------- entry point
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``go2-wbc``; returns the exit code (see ``go2-wbc --help``)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _check_combinations(args)
+    try:
+        return int(args.run(args))
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -1,0 +1,357 @@
+"""The go2-wbc command line end to end: output files, exit codes, messages."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import imageio
+import numpy as np
+import pytest
+
+from actions.high_five_behaviour import ROBOT_NOT_READY
+from actions.robot_context import RobotContext
+from sim.cli import (
+    EXIT_NOT_SUCCEEDED,
+    EXIT_REJECTED,
+    EXIT_SUCCEEDED,
+    EXIT_USAGE,
+    SETTLE_S,
+    build_parser,
+    load_trajectory_goal,
+    main,
+)
+from wbc.description import JOINT_NAMES, LEGS
+
+HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading",
+                    "shifting_back", "complete"]
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+WAVE_YAML = """\
+joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]
+points:
+  - positions: [-0.1, -0.3, -1.6]
+    velocities: [0.0, -0.5, 0.8]
+    time_from_start: 1.0
+  - positions: [-0.1, -0.5, -1.2]
+    velocities: [0.0, 0.0, 0.0]
+    time_from_start: 1.5
+goal_tolerance:
+  - {name: FR_thigh_joint, position: 0.05}
+goal_time_tolerance: 0.5
+"""
+
+
+def run(argv: list[str]) -> tuple[int, str]:
+    """``main(argv)`` in this process; returns the exit code and what it printed."""
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(argv)
+    return code, out.getvalue()
+
+
+def usage_error(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
+    """Parse ``argv``, expecting exit 2; returns the message (checked to be one line)."""
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == EXIT_USAGE
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.splitlines()
+    assert len(lines) == 1, captured.err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def high_five(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """One high five with a 0 s hold and every file output except the video."""
+    folder = tmp_path_factory.mktemp("high_five")
+    paths = {"report": folder / "run.json", "log": folder / "run.npz",
+             "plot": folder / "run.png"}
+    code, out = run(["high-five", "--hold", "0", "--report", str(paths["report"]),
+                     "--log", str(paths["log"]), "--plot", str(paths["plot"])])
+    return {"code": code, "out": out, "paths": paths,
+            "report": json.loads(paths["report"].read_text())}
+
+
+# ----------------------------------------------------------------------------- a high five
+
+
+def test_high_five_succeeds_and_prints_each_phase_once_then_the_result(high_five):
+    assert high_five["code"] == EXIT_SUCCEEDED
+    lines = high_five["out"].splitlines()
+    assert lines[0] == (f"[{SETTLE_S:7.3f} s] high_five: sending goal "
+                        "(target_height 0.40 m, hold 0 s)")
+    assert lines[1] == f"[{SETTLE_S:7.3f} s] goal accepted"
+    # Not a terminal: one plain line per phase, no progress line.
+    phase_lines = lines[2:2 + len(HIGH_FIVE_PHASES)]
+    assert [line.split()[-1] for line in phase_lines] == HIGH_FIVE_PHASES
+    assert "\r" not in high_five["out"]
+    assert lines[10].endswith("result: SUCCEEDED: high five done: foot raised to 0.400 m, "
+                              "held 0 s, back on four feet")
+    assert lines[11].startswith("metrics: raised foot error RMS ")
+    assert lines[12:] == [f"wrote {high_five['paths'][k]}" + suffix for k, suffix in
+                          (("report", ""), ("log", " (5806 ticks)"), ("plot", ""))]
+
+
+def test_report_has_the_result_phases_in_order_and_the_feedback(high_five):
+    report = high_five["report"]
+    assert report["action"] == "high_five"
+    assert report["goal"] == {"target_height": 0.4, "hold_seconds": 0}
+    assert report["result"] == {
+        "status": "SUCCEEDED", "success": True,
+        "message": "high five done: foot raised to 0.400 m, held 0 s, back on four feet"}
+    phases = report["phases"]
+    assert [p["phase"] for p in phases] == HIGH_FIVE_PHASES
+    times = [p["t_s"] for p in phases]
+    assert times[0] == pytest.approx(SETTLE_S) and times == sorted(times)
+    # Shift 1.0 s, unload 0.4 s, raise 1.5 s, (hold 0 s), lower 1.5 s, reload 0.4 s, shift 1.0 s.
+    assert np.diff(times) == pytest.approx([1.0, 0.4, 1.5, 0.0, 1.5, 0.4, 1.0], abs=0.005)
+    feedback = report["feedback"]
+    progress = [f["progress"] for f in feedback]
+    assert progress == sorted(progress) and progress[-1] == 1.0
+    assert max(np.diff([f["t_s"] for f in feedback])) <= 0.02 + 1e-6  # 50 Hz at least
+    assert [e["event"] for e in report["events"]] == ["accepted", "result"]
+
+
+def test_report_metrics_meet_the_controller_goals(high_five):
+    m = high_five["report"]["metrics"]
+    assert set(m) >= {
+        "raised_foot_rms_mm", "raised_foot_max_mm", "holding_rms_mm", "stance_sliding_max_mm",
+        "stance_travel_max_mm", "min_stance_normal_force_n", "min_com_margin_mm",
+        "max_base_tilt_deg", "max_torque_fraction", "qp_failures", "tick_median_us",
+        "tick_p99_us", "tick_max_us", "real_time_factor"}
+    assert m["ticks"] == 5806 and m["duration_s"] == pytest.approx(5.806)
+    assert m["raised_foot_rms_mm"] <= 5.0 and m["raised_foot_max_mm"] <= 10.0
+    assert m["stance_sliding_max_mm"] <= 2.0  # measured from the goal, after the settle
+    assert m["stance_travel_max_mm"] <= 10.0  # the spheres roll; the lift tests bound it tightly
+    assert m["min_stance_normal_force_n"] >= 5.0
+    assert m["min_com_margin_mm"] > 10.0
+    assert m["max_base_tilt_deg"] < 3.0 and not m["fell"]
+    assert m["max_torque_fraction"] <= 0.9
+    assert m["qp_failures"] == 0
+    assert 0 < m["tick_median_us"] <= m["tick_p99_us"] <= m["tick_max_us"]
+    assert m["real_time_factor"] > 0
+
+
+def test_log_has_one_row_per_tick_with_consistent_arrays(high_five):
+    log = np.load(high_five["paths"]["log"])
+    n = 5806
+    shapes = {"t_s": (n,), "q": (n, 19), "v": (n, 18), "tau": (n, 12), "foot_target": (n, 3),
+              "foot_position": (n, 3), "phase": (n,), "contact_forces": (n, 4, 3),
+              "com_margin_m": (n,), "qp_ok": (n,), "tick_us": (n,)}
+    assert {k: log[k].shape for k in shapes} == shapes
+    assert list(log["joint_names"]) == list(JOINT_NAMES)
+    assert list(log["legs"]) == list(LEGS) and str(log["raised_leg"]) == "FR"
+    assert np.allclose(np.diff(log["t_s"]), 1e-3) and log["t_s"][0] == pytest.approx(SETTLE_S)
+    assert np.allclose(np.linalg.norm(log["q"][:, 3:7], axis=1), 1.0)
+    phases = list(dict.fromkeys(log["phase"]))
+    assert phases == HIGH_FIVE_PHASES
+    tracking = np.isin(log["phase"], ["raising", "ready", "lowering"])
+    assert np.all(np.isfinite(log["foot_target"][tracking]))
+    assert np.all(np.isnan(log["foot_target"][~tracking]))
+    assert np.nanmax(log["foot_target"][:, 2]) == pytest.approx(0.40, abs=1e-6)
+    foot_error = np.linalg.norm(log["foot_position"] - log["foot_target"], axis=1)[tracking]
+    assert foot_error.max() <= 0.010
+    fr_normal = log["contact_forces"][:, LEGS.index("FR"), 2]
+    assert np.all(fr_normal[log["phase"] == "ready"] == 0.0)  # in the air, per MuJoCo
+    total = log["contact_forces"][:, :, 2].sum(axis=1)
+    assert np.median(total) == pytest.approx(15.0 * 9.81, rel=0.1)  # carries its weight
+    assert log["qp_ok"].all()
+
+
+def test_plot_is_a_png(high_five):
+    data = high_five["paths"]["plot"].read_bytes()
+    assert data.startswith(PNG_SIGNATURE) and len(data) > 20_000
+
+
+def test_cancel_at_ends_canceled_with_the_foot_down(tmp_path):
+    report_path = tmp_path / "cancel.json"
+    code, out = run(["high-five", "--cancel-at", "2.5", "--report", str(report_path)])
+    assert code == EXIT_NOT_SUCCEEDED
+    report = json.loads(report_path.read_text())
+    assert report["result"]["status"] == "CANCELED" and not report["result"]["success"]
+    assert "the foot is down" in report["result"]["message"]
+    cancel = [e for e in report["events"] if e["event"] == "cancel_requested"]
+    assert cancel == [{"t_s": 2.5, "event": "cancel_requested", "reason": "--cancel-at 2.5"}]
+    phases = [p["phase"] for p in report["phases"]]
+    assert phases[:3] == ["shifting", "unloading", "raising"] and phases[-1] == "canceled"
+    assert "cancel accepted" in out
+    assert report["metrics"]["qp_failures"] == 0
+
+
+def test_push_goes_in_the_requested_direction_relative_to_the_heading(tmp_path):
+    report_path, log_path = tmp_path / "push.json", tmp_path / "push.npz"
+    code, _ = run(["stand", "--start-pose", "standing", "--duration", "0.5",
+                   "--push", "60,0.1", "--push-at", "0.35", "--push-dir", "90",
+                   "--report", str(report_path), "--log", str(log_path)])
+    assert code == EXIT_SUCCEEDED
+    (push,) = [e for e in json.loads(report_path.read_text())["events"] if e["event"] == "push"]
+    assert push["t_s"] == pytest.approx(0.35)
+    assert push["force_n"] == pytest.approx([0.0, 60.0, 0.0], abs=0.5)  # 90 deg: to the left
+    log = np.load(log_path)
+    after = log["t_s"] > 0.45
+    base_y = log["q"][:, 1]
+    assert base_y[after].max() - base_y[0] > 0.001  # moved left
+
+
+def test_sit_and_stand_succeed(tmp_path):
+    code, out = run(["sit", "--duration", "0.5"])
+    assert code == EXIT_SUCCEEDED and "result: SUCCEEDED: reached the lying pose" in out
+    code, out = run(["stand", "--duration", "0.5"])  # from lying, the default start pose
+    assert code == EXIT_SUCCEEDED and "result: SUCCEEDED: reached the standing pose" in out
+
+
+# ----------------------------------------------------------------------------- rejections
+
+
+def test_a_rejected_goal_exits_3_and_prints_the_reason(monkeypatch, tmp_path):
+    monkeypatch.setattr(RobotContext, "is_upright", lambda self: False)
+    report_path = tmp_path / "rejected.json"
+    code, out = run(["high-five", "--report", str(report_path)])
+    assert code == EXIT_REJECTED
+    assert f"goal rejected (code {ROBOT_NOT_READY}): robot not able: base tilt" in out
+    result = json.loads(report_path.read_text())["result"]
+    assert result["status"] == "REJECTED" and result["rejection_code"] == ROBOT_NOT_READY
+
+
+def test_a_trajectory_with_an_unknown_joint_is_rejected_by_the_server(tmp_path):
+    path = tmp_path / "bad_joint.yaml"
+    path.write_text(WAVE_YAML.replace("FR_hip_joint", "FR_elbow_joint"))
+    code, out = run(["trajectory", str(path)])
+    assert code == EXIT_REJECTED
+    assert "goal rejected (code -2): trajectory.joint_names[0]: unknown joint " \
+           "'FR_elbow_joint'; valid joints: FL_hip_joint" in out
+
+
+# ----------------------------------------------------------------------------- trajectories
+
+
+def test_trajectory_file_yaml_and_json_give_the_same_goal(tmp_path):
+    import yaml
+
+    yaml_path, json_path = tmp_path / "wave.yaml", tmp_path / "wave.json"
+    yaml_path.write_text(WAVE_YAML)
+    json_path.write_text(json.dumps(yaml.safe_load(WAVE_YAML)))
+    goal = load_trajectory_goal(yaml_path)
+    assert goal == load_trajectory_goal(json_path)
+    assert goal.trajectory.joint_names == ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"]
+    assert [p.time_from_start.to_seconds() for p in goal.trajectory.points] == [1.0, 1.5]
+    assert goal.trajectory.points[0].velocities == [0.0, -0.5, 0.8]
+    assert goal.trajectory.points[1].accelerations == []
+    assert [(t.name, t.position) for t in goal.goal_tolerance] == [("FR_thigh_joint", 0.05)]
+    assert goal.path_tolerance == [] and goal.goal_time_tolerance.to_seconds() == 0.5
+
+
+def test_trajectory_from_a_file_succeeds(tmp_path):
+    path = tmp_path / "wave.yaml"
+    path.write_text(WAVE_YAML)
+    code, out = run(["trajectory", str(path)])
+    assert code == EXIT_SUCCEEDED, out
+    phases = [m[1] for m in re.finditer(r"^\[ *[\d.]+ s\] +\d+ %  (\S+)", out, re.MULTILINE)]
+    assert phases == ["shifting", "unloading", "following", "succeeded"]
+    assert "result: SUCCEEDED" in out
+
+
+# ----------------------------------------------------------------------------- bad arguments
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["jump"], ("COMMAND: invalid choice: 'jump' (choose from 'high-five', 'stand', 'sit', "
+                "'trajectory', 'stand-pd')")),
+    ([], "the following arguments are required: COMMAND"),
+    (["high-five", "--height", "0.9"],
+     "--height: expected a height in [0.10, 0.50] m, received 0.9"),
+    (["high-five", "--height", "high"],
+     "--height: expected a height in [0.10, 0.50] m, received 'high'"),
+    (["high-five", "--hold", "1.5"],
+     "--hold: expected a whole number of seconds in [0, 60], received '1.5'"),
+    (["sit", "--duration", "0.1"], "--duration: expected a duration in [0.5, 10] s, received 0.1"),
+    (["high-five", "--push", "40"], ("--push: expected FORCE_N,DURATION_S with a force in "
+                                     "[0, 500] N and a duration in (0, 5] s (e.g. 40,0.1), "
+                                     "received '40'")),
+    (["high-five", "--push-at", "2"], "--push-at: only used with --push"),
+    (["high-five", "--video", "run.avi"],
+     "--video: expected a file name ending in .mp4, received 'run.avi'"),
+    (["high-five", "--video", "v.mp4", "--video-size", "640x"],
+     ("--video-size: expected WIDTHxHEIGHT in pixels, both even and in [16, 3840] "
+      "(e.g. 640x480), received '640x'")),
+    (["high-five", "--report", "/no/such/dir/r.json"],
+     "--report: directory '/no/such/dir' does not exist (for '/no/such/dir/r.json')"),
+    (["trajectory", "/no/such/file.yaml"],
+     "FILE: cannot read '/no/such/file.yaml': No such file or directory"),
+])
+def test_bad_arguments_exit_2_with_one_line_naming_the_option(argv, message, capsys):
+    line = usage_error(argv, capsys)
+    prog = " ".join(["go2-wbc", *argv[:1]]) if argv and argv[0] != "jump" else "go2-wbc"
+    assert line == f"{prog}: error: {message} (see '{prog} --help')"
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    ("joint_names: [FR_hip_joint]\npoints:\n  - positions: [0.1]\n    time: 1\n",
+     ("points[0]: unknown key 'time'; valid keys: positions, velocities, accelerations, "
+      "effort, time_from_start")),
+    ("joint_names: [FR_hip_joint]\npoints:\n  - positions: [x]\n    time_from_start: 1\n",
+     ("points[0]: JointTrajectoryPoint.positions[0] must be a real number; received 'x' "
+      "(type str)")),
+    ("joint_names: [FR_hip_joint\n",
+     "YAML error at line 2, column 1: expected ',' or ']', but got '<stream end>'"),
+    ("- 1\n", ("file: expected a mapping with keys joint_names, points, path_tolerance, "
+               "goal_tolerance, goal_time_tolerance, received list")),
+    ("joint_names: [FR_hip_joint]\n", "file: missing key 'points'"),
+])
+def test_an_invalid_trajectory_file_exits_2_and_says_what_is_wrong(content, message, tmp_path,
+                                                                   capsys):
+    path = tmp_path / "bad.yaml"
+    path.write_text(content)
+    line = usage_error(["trajectory", str(path)], capsys)
+    assert line == (f"go2-wbc trajectory: error: FILE: '{path}' is not a valid trajectory "
+                    f"file: {message} (see 'go2-wbc trajectory --help')")
+
+
+def test_every_option_says_its_default(capsys):
+    parser = build_parser()
+    with pytest.raises(SystemExit) as exc:
+        main(["high-five", "--help"])
+    assert exc.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
+    for phrase in ("--height M foot height above the ground [m], in [0.10, 0.50] (default: 0.40)",
+                   "--hold S seconds to hold the foot up [s], a whole number in [0, 60] (default: 2)",
+                   "--fps N video frame rate [1/s] of simulated time (default: 30)",
+                   "--video-size WxH video frame size in pixels (default: 640x480)",
+                   "3 the action server rejected the goal"):
+        assert phrase in text
+    subparsers = parser._subparsers._group_actions[0].choices  # argparse keeps them here
+    for name, sub in subparsers.items():
+        for action in sub._actions:
+            if action.option_strings and action.dest != "help":
+                assert "default" in action.help, (name, action.option_strings)
+
+
+# ----------------------------------------------------------------------------- the installed command
+
+
+def test_installed_command_records_a_video_of_the_right_size(tmp_path):
+    command = Path(sys.executable).with_name("go2-wbc")
+    argv = [str(command)] if command.exists() else [sys.executable, "-m", "sim.cli"]
+    video, report = tmp_path / "sit.mp4", tmp_path / "sit.json"
+    done = subprocess.run(
+        [*argv, "sit", "--duration", "1", "--video", str(video), "--fps", "10",
+         "--video-size", "160x120", "--report", str(report)],
+        capture_output=True, text=True, timeout=120, check=False)
+    if done.returncode == 4 and "offscreen rendering is unavailable" in done.stderr:
+        pytest.skip(f"no offscreen OpenGL on this machine: {done.stderr.strip()}")
+    assert done.returncode == EXIT_SUCCEEDED, done.stdout + done.stderr
+    assert json.loads(report.read_text())["result"]["success"] is True
+    with imageio.get_reader(video) as reader:
+        frames = list(reader.iter_data())  # the reader's len() is inf
+    assert len(frames) == 1 + math.floor(1.0 * 10 + 1e-9)  # t = 0.3, 0.4, ..., 1.3 s
+    assert all(f.shape == (120, 160, 3) for f in frames)
+    # The robot lies down: the last frame differs from the first.
+    assert np.abs(frames[-1].astype(float) - frames[0].astype(float)).mean() > 1.0
+    assert f"wrote {video} ({len(frames)} frames at 10 fps)" in done.stdout
