@@ -46,7 +46,7 @@ def test_stands_two_seconds_in_mujoco(standing, description):
     assert total == pytest.approx(description.total_mass * 9.81, rel=0.02)
     assert np.linalg.norm(controller.com_velocity()) < 0.01
     assert set(out.timings) == {"model", "solve", "total"}
-    eq, ineq = out.violation
+    eq, ineq = controller.solution_violations()
     assert eq < 1e-6 and ineq < 1e-6
 
 
@@ -58,6 +58,7 @@ def test_nan_state_returns_fallback_and_recovers(standing):
     bad_q[9] = np.nan
     out = controller.step(bad_q, v)
     assert out.status is ControlStatus.FALLBACK
+    assert np.isnan(controller.solution_violations()).all()
     assert out.message == "state: non-finite values at q[9]"
     assert np.isfinite(out.tau).all()
     assert np.all(np.abs(out.tau) <= controller.tau_max)

@@ -65,9 +65,8 @@ class PlacoController:
       acceleration/force rate terms, and no rolling-foot model: the contact point is the
       foot sphere's centre (``radius_m = 0`` in :class:`tasks.ContactTask` terms).
     - ``timings`` has ``model`` (``update_kinematics``), ``solve`` (PlaCo's task update,
-      assembly and solve together) and ``total``. ``violation`` is measured on PlaCo's hard
-      rows (floating-base dynamics and stance-foot accelerations; torque limits, unilateral
-      and friction rows) after the timed part.
+      assembly and solve together) and ``total``. :meth:`solution_violations` checks the
+      last solution on PlaCo's hard rows, off the hot path.
 
     Example:
         >>> controller = PlacoController()
@@ -143,6 +142,7 @@ class PlacoController:
         for leg in LEGS:
             self._configure_foot(leg)
         self._tau_good = np.zeros(_NJ)
+        self._last: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._q: np.ndarray | None = None
         self.ticks = 0
         self.failures = 0
@@ -235,6 +235,16 @@ class PlacoController:
         check_name("leg", leg, LEGS)
         T_world_base = self.robot.get_T_world_frame("base")
         return T_world_base[:3, :3] @ self._shoulder_in_base[leg] + T_world_base[:3, 3]
+
+    @property
+    def min_normal_force_n(self) -> float:
+        """The minimum normal force [N] of a loaded stance foot."""
+        return self.config.min_normal_force_n
+
+    @property
+    def total_mass_kg(self) -> float:
+        """The model's total mass [kg]."""
+        return self.description.total_mass
 
     @property
     def full_normal_force_n(self) -> float:
@@ -379,12 +389,12 @@ class PlacoController:
                 forces[i] = np.asarray(self.contacts[leg].wrench, dtype=float).reshape(3)
         tau = tau_full[6:]
         self._tau_good = tau
+        self._last = (tau_full, qdd, forces)
+        task_errors = self._task_errors(q)
         t3 = time.perf_counter()
         return ControlOutput(
-            tau=tau, qdd=qdd, forces=forces, status=ControlStatus.OK,
-            task_errors=self._task_errors(),
+            tau=tau, qdd=qdd, forces=forces, status=ControlStatus.OK, task_errors=task_errors,
             timings={"model": t1 - t0, "solve": t2 - t1, "total": t3 - t0},
-            violation=self._violations(tau_full, qdd, forces),
         )
 
     def _update_model(self, q: np.ndarray, v: np.ndarray) -> None:
@@ -393,9 +403,17 @@ class PlacoController:
         self.robot.update_kinematics()
         self._q = q
 
-    def _violations(self, tau_full: np.ndarray, qdd: np.ndarray,
-                    forces: np.ndarray) -> tuple[float, float]:
-        """Largest equality and inequality violation of PlaCo's solution on its hard rows."""
+    def solution_violations(self) -> tuple[float, float]:
+        """Largest equality and inequality violation of the last solution on PlaCo's hard rows.
+
+        Equalities: the floating base's torque and the stance feet's acceleration tasks;
+        inequalities: torque limits, unilateral and friction rows. Off the hot path: call it
+        right after :meth:`step`, before the contacts change. ``(nan, nan)`` when the last
+        tick fell back.
+        """
+        if self._last is None:
+            return math.nan, math.nan
+        tau_full, qdd, forces = self._last
         eq = float(np.abs(tau_full[:6]).max())
         mu = self.config.friction_coefficient
         ineq = float(max((np.abs(tau_full[6:]) - self.tau_max).max(), 0.0))
@@ -409,11 +427,10 @@ class PlacoController:
             ineq = max(ineq, -fz, abs(fx) - mu * fz, abs(fy) - mu * fz)
         return eq, ineq
 
-    def _task_errors(self) -> dict[str, float]:
-        posture = [float(np.asarray(task.error).reshape(-1)[0]) for task in self.posture_tasks]
+    def _task_errors(self, q: np.ndarray) -> dict[str, float]:
         errors = {"com": float(np.linalg.norm(self.com_task.error)),
                   "base_orientation": float(np.linalg.norm(self.base_task.error)),
-                  "posture": float(np.linalg.norm(posture))}
+                  "posture": float(np.linalg.norm(self._posture - q[7:]))}
         for leg in LEGS:
             if not self._stance[leg]:
                 errors[f"{leg}_foot"] = float(np.linalg.norm(self.foot_tasks[leg].error))
@@ -426,6 +443,7 @@ class PlacoController:
     def _fallback(self, v: np.ndarray, message: str, t0: float) -> ControlOutput:
         """Safe command: the last good torques with joint damping, inside the limits."""
         self.failures += 1
+        self._last = None
         vj = np.zeros(_NJ)
         v = np.asarray(v, dtype=float).reshape(-1)
         if v.shape == (_NV,):
