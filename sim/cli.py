@@ -88,12 +88,12 @@ examples:
 
 TRAJECTORY_FORMAT_HELP = """\
 trajectory file (YAML, or JSON with a .json suffix; same keys):
-  joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]   # any of the 12 joints
+  joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]   # joints of one leg
   points:                              # in time order
-    - positions: [0.0, 0.67, -1.3]     # [rad], one per joint name
-      velocities: [0.0, 0.0, 0.0]      # optional [rad/s]
-      accelerations: [0.0, 0.0, 0.0]   # optional [rad/s^2]
-      time_from_start: 1.5             # [s] from the start of the goal
+    - positions: [-0.1, -0.3, -1.6]    # [rad], one per joint name: foot up, in front
+      velocities: [0.0, 0.0, 0.0]      # optional [rad/s]; in every point or in none
+      accelerations: [0.0, 0.0, 0.0]   # optional [rad/s^2]; in every point or in none
+      time_from_start: 2.0             # [s] from the moment the leg is free
   path_tolerance:                      # optional, per joint, during the motion
     - {name: FR_thigh_joint, position: 0.2}        # [rad]; 0 = server default, -1 = none
   goal_tolerance:                      # optional, per joint, at the end
@@ -101,6 +101,7 @@ trajectory file (YAML, or JSON with a .json suffix; same keys):
   goal_time_tolerance: 0.5             # optional [s] after the last point
 A file that cannot be read or does not have this shape is a usage error (exit 2);
 joint names, lengths and times are judged by the action server (a rejection is exit 3).
+
 """
 
 
@@ -867,7 +868,8 @@ class GoalRun:
         if error is not None:
             entry["max_joint_error_rad"] = round(error, 5)
             self.max_error = max(self.max_error, error)
-            detail = f"largest joint error so far {self.max_error:.4f} rad"
+            if self.max_error > 0.0:
+                detail = f"largest joint error so far {self.max_error:.4f} rad"
         self.feedback.append(entry)
         self.printer.feedback(now_s, phase, progress, detail)
 
@@ -963,8 +965,10 @@ class GoalRun:
         if hasattr(result, "error_code"):
             self.result["error_code"] = error_code
         self._event("result", status=wrapped.status.name)
-        self.say(f"[{self.loop.context.now_s:7.3f} s] result: {wrapped.status.name}"
-                 + (f": {message}" if message else ""))
+        text = f"[{self.loop.context.now_s:7.3f} s] result: {wrapped.status.name}"
+        if hasattr(result, "error_code"):
+            text += f" (error_code {error_code})"
+        self.say(text + (f": {message}" if message else ""))
         if self.metrics is not None:
             self.summary = self.metrics.metrics.summary(
                 max(self.wall_s - self.overhead_s[0], 1e-9))

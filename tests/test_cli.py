@@ -23,6 +23,7 @@ from sim.cli import (
     EXIT_SUCCEEDED,
     EXIT_USAGE,
     SETTLE_S,
+    TRAJECTORY_FORMAT_HELP,
     build_parser,
     load_trajectory_goal,
     main,
@@ -246,6 +247,17 @@ def test_trajectory_file_yaml_and_json_give_the_same_goal(tmp_path):
     assert goal.trajectory.points[1].accelerations == []
     assert [(t.name, t.position) for t in goal.goal_tolerance] == [("FR_thigh_joint", 0.05)]
     assert goal.path_tolerance == [] and goal.goal_time_tolerance.to_seconds() == 0.5
+
+
+def test_the_format_shown_by_help_is_a_valid_trajectory_file(tmp_path):
+    path = tmp_path / "from_help.yaml"
+    path.write_text(TRAJECTORY_FORMAT_HELP.split("\n", 1)[1].split("\nA file")[0])
+    goal = load_trajectory_goal(path)
+    assert goal.trajectory.joint_names == ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"]
+    (point,) = goal.trajectory.points
+    assert point.positions == [-0.1, -0.3, -1.6] and point.time_from_start.to_seconds() == 2.0
+    assert [t.name for t in goal.path_tolerance + goal.goal_tolerance] == ["FR_thigh_joint"] * 2
+    assert goal.goal_time_tolerance.to_seconds() == 0.5
 
 
 def test_trajectory_from_a_file_succeeds(tmp_path):
