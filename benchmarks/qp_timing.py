@@ -69,6 +69,8 @@ class Episode:
     """What one closed-loop run recorded (timed ticks only in ``timings``)."""
 
     timings: dict[str, list[float]] = field(default_factory=lambda: {s: [] for s in STAGES})
+    #: CPU time [s] of the calling thread in ``controller.step`` (preemption excluded).
+    cpu_times: list[float] = field(default_factory=list)
     violations: list[tuple[float, float]] = field(default_factory=list)
     failures: int = 0
     ticks: int = 0
@@ -86,19 +88,28 @@ class Episode:
 def solution_violations(controller: BalanceController, out: Any) -> tuple[float, float] | None:
     """Largest equality and inequality violation of the QP solution behind ``out``.
 
-    :class:`WholeBodyController`: its ``last_solution`` checked against its ``problem``
-    (call right after ``step``, before the references change); PlaCo's controller reports
-    its own in ``out.violation``. ``None`` for a fallback tick.
+    :class:`WholeBodyController`: its ``last_solution`` checked against its ``problem``;
+    :class:`PlacoController`: its ``solution_violations()``. Call right after ``step``,
+    before the references change. ``None`` for a fallback tick.
     """
     if not out.ok:
         return None
     if isinstance(controller, WholeBodyController):
         return controller.problem.violations(controller.last_solution)
-    return tuple(out.violation)
+    return controller.solution_violations()  # type: ignore[attr-defined]
 
 
-def _record(episode: Episode, controller: BalanceController, out: Any) -> None:
+def _timed_step(controller: BalanceController, q: np.ndarray, v: np.ndarray
+                ) -> tuple[Any, float]:
+    """``controller.step(q, v)`` and the CPU time [s] the calling thread spent in it."""
+    cpu = time.thread_time()
+    out = controller.step(q, v)
+    return out, time.thread_time() - cpu
+
+
+def _record(episode: Episode, controller: BalanceController, out: Any, cpu_s: float) -> None:
     episode.ticks += 1
+    episode.cpu_times.append(cpu_s)
     for stage in STAGES:
         episode.timings[stage].append(out.timings.get(stage, np.nan))
     if not out.ok:
@@ -148,10 +159,10 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
         wall = time.perf_counter()
         phase = lift.update(sim.time_s)
         q, v = sim.state()
-        out = controller.step(q, v)
+        out, cpu_s = _timed_step(controller, q, v)
         sim.step(out.tau)
         episode.control_wall_s += time.perf_counter() - wall
-        _record(episode, controller, out)
+        _record(episode, controller, out, cpu_s)
         if meter is not None:
             error = None
             if phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
@@ -186,6 +197,7 @@ def backend_row(name: str, episode: Episode) -> dict[str, Any]:
         "name": name, "skipped": None, "ticks": episode.ticks, "sim_s": episode.sim_s,
         **{f"{k}_us": v for k, v in total.items()},
         "stage_median_us": stages,
+        "cpu_median_us": _stats_us(episode.cpu_times)["median"],
         "max_eq_violation": _finite_or_none(np.nanmax(violations[:, 0])),
         "max_ineq_violation": _finite_or_none(np.nanmax(violations[:, 1])),
         "failures": episode.failures,
@@ -218,16 +230,17 @@ def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
     q, _ = sim.state()
     controller.reset(q)
 
-    def tick(n: int) -> list[float]:
-        times = []
+    def tick(n: int) -> tuple[list[float], list[float]]:
+        times, cpu_times = [], []
         for _ in range(n):
             if lift is not None:
                 lift.update(sim.time_s)
             q, v = sim.state()
-            out = controller.step(q, v)
+            out, cpu_s = _timed_step(controller, q, v)
             sim.step(out.tau)
             times.append(out.timings["total"])
-        return times
+            cpu_times.append(cpu_s)
+        return times, cpu_times
 
     lift = None
     tick(WARMUP_TICKS)
@@ -244,8 +257,9 @@ def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
     rows.append(("3 contacts, swing-foot task weight 0", tick(ticks)))
     sizes = [size4, size3, size3]
     return [{"controller": name, "scenario": label, "qp": size, "ticks": len(times),
-             **{f"{k}_us": v for k, v in _stats_us(times).items()}}
-            for (label, times), size in zip(rows, sizes)]
+             **{f"{k}_us": v for k, v in _stats_us(times).items()},
+             "cpu_median_us": _stats_us(cpu_times)["median"]}
+            for (label, (times, cpu_times)), size in zip(rows, sizes)]
 
 
 # ---------------------------------------------------------------------------- reporting
@@ -290,7 +304,7 @@ def format_report(report: dict[str, Any]) -> str:
              f"Mode: {report['mode']}. {report['episode']['description']}", ""]
     head = (f"{'backend':<22}{'ticks':>6}{'model':>7}{'tasks':>7}{'asm':>7}{'solve':>8}"
             f"{'median':>8}{'p90':>8}{'p99':>8}{'max':>8}{'eq viol':>9}{'ineq viol':>10}"
-            f"{'fail':>5}{'x PlaCo':>8}{'cpu%':>5}")
+            f"{'fail':>5}{'x PlaCo':>8}{'cpu med':>8}{'x PlaCo':>8}{'cpu%':>5}")
     lines += ["Tick time [us] per backend (stage columns: medians)", head, "-" * len(head)]
     for row in report["backends"]:
         if row["skipped"]:
@@ -303,14 +317,16 @@ def format_report(report: dict[str, Any]) -> str:
             f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}{_fmt(row['max_us']):>8}"
             f"{_fmt(row['max_eq_violation'], -1):>9}{_fmt(row['max_ineq_violation'], -1):>10}"
             f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}"
+            f"{_fmt(row['cpu_median_us']):>8}{_fmt(row['cpu_ratio_to_placo'], 2):>8}"
             f"{_fmt(100 * row['cpu_share']):>5}")
     lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
-    head = f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}{'p99':>8}"
+    head = (f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}"
+            f"{'p99':>8}{'cpu med':>8}")
     lines += [head, "-" * len(head)]
     for row in report["scaling"]:
         lines.append(f"{row['controller']:<16}{row['scenario']:<44}{row['qp']:<36}"
                      f"{row['ticks']:>6}{_fmt(row['median_us']):>8}{_fmt(row['p90_us']):>8}"
-                     f"{_fmt(row['p99_us']):>8}")
+                     f"{_fmt(row['p99_us']):>8}{_fmt(row['cpu_median_us']):>8}")
     ep = report["episode_table"]
     lines += ["", f"Episode quality, {ep['controller']} ({ep['description']})"]
     for key, value in ep["metrics"].items():
@@ -381,11 +397,12 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
                               timing=QUICK_TIMING if quick else None)
         rows.append(backend_row(name, episode))
     rows += [{"name": name, "skipped": reason} for name, reason in missing_backends().items()]
-    placo_median = next((r["median_us"] for r in rows if r["name"] == PLACO and not r["skipped"]),
-                        None)
+    placo = next((r for r in rows if r["name"] == PLACO and not r["skipped"]), None)
     for row in rows:
         if not row["skipped"]:
-            row["ratio_to_placo"] = (row["median_us"] / placo_median) if placo_median else None
+            row["ratio_to_placo"] = row["median_us"] / placo["median_us"] if placo else None
+            row["cpu_ratio_to_placo"] = (row["cpu_median_us"] / placo["cpu_median_us"]
+                                         if placo else None)
 
     log("  episode quality: default backend, whole lift")
     quality = run_episode(WholeBodyController(), hold_s=hold_s, stop_after_s=None, quality=True)
@@ -410,10 +427,13 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
         ("Violations: WholeBodyController's last_solution checked with problem.violations() "
          "right after each step; PlaCo's are its hard rows (floating-base torque, stance-foot "
          "accelerations, torque limits, unilateral and friction rows), from "
-         "ControlOutput.violation."),
+         "PlacoController.solution_violations(); both outside the timed step."),
         "Fallback ticks count in the timing statistics and as failures.",
-        ("cpu%: the process's CPU time over the episode's wall time; well below 100, other "
-         "processes shared the cores and the p90-max columns measure their preemptions."),
+        ("Wall-clock columns come from ControlOutput.timings; 'cpu med' is the median CPU time "
+         "of the calling thread in controller.step (thread_time), which preemption by other "
+         "processes does not inflate, and its 'x PlaCo' the ratio of those. cpu%: the "
+         "process's CPU time over the episode's wall time; well below 100, other processes "
+         "shared the cores and the wall-clock p90-max columns measure their preemptions."),
         ("Before the first row, one short episode of the default controller warms the process "
          "up (imports, caches) and is discarded. Times depend on the machine's load."),
         ("Scaling: the WholeBodyController QP has a fixed size whatever the contacts (a swing "

@@ -44,7 +44,8 @@ def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
         assert row["ticks"] == 1000, name
         assert 0 < row["median_us"] <= row["p90_us"] <= row["p99_us"] <= row["max_us"], name
         assert len(row["total_samples_us"]) == row["ticks"]
-        assert row["ratio_to_placo"] > 0
+        assert row["ratio_to_placo"] > 0 and row["cpu_ratio_to_placo"] > 0
+        assert 0 < row["cpu_median_us"] < 10 * row["max_us"]
         assert isinstance(row["failures"], int) and 0.0 < row["cpu_share"] <= 1.5
         if row["failures"] < row["ticks"]:
             # Tight-tolerance solvers: a solution that breaks its own constraints is a bug.
@@ -59,7 +60,7 @@ def test_scaling_and_episode_tables(quick_run):
     scenarios = {(row["controller"], row["scenario"]) for row in report["scaling"]}
     assert len(scenarios) == 6
     for row in report["scaling"]:
-        assert row["ticks"] == 200 and row["median_us"] > 0
+        assert row["ticks"] == 200 and row["median_us"] > 0 and row["cpu_median_us"] > 0
     metrics = report["episode_table"]["metrics"]
     for key in ("raised_foot_rms_mm", "raised_foot_max_mm", "holding_rms_mm",
                 "holding_max_mm", "stance_sliding_max_mm", "stance_travel_max_mm",
