@@ -42,8 +42,9 @@ def test_high_five_quality(high_five):
     assert s.raised_foot_rms_mm <= 5.0
     assert s.holding_rms_mm <= 2.0
     assert s.stance_sliding_max_mm <= 2.0
-    # The feet are spheres: they roll (their centres move and come back) as the legs tilt.
-    assert s.stance_travel_max_mm <= 6.0
+    # The feet are spheres: they roll (their centres move and come back) as the legs tilt,
+    # about 0.07 mm per mm of body shift; the 7 cm-deep shift that absorbs pushes costs ~7 mm.
+    assert s.stance_travel_max_mm <= 8.0
     assert s.min_stance_normal_force_n >= 5.0
     assert s.max_torque_fraction <= 0.9
     assert s.max_torque_jump_nm <= 1.0

@@ -31,6 +31,10 @@ def reference_terms(c, q, v):
     pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
     H = c._h_const.copy()
     f = np.zeros(H.shape[0])
+    contact = ContactTask(model, [f"{leg}_foot" for leg in LEGS], radius_m=FOOT_RADIUS_M,
+                          kd=c.config.contact_damping)
+    contact.update(model, data, q, v)
+    M = np.triu(data.M) + np.triu(data.M, 1).T
     terms = [c.com_task, c.base_task, c.posture_task]
     terms += [c.foot_tasks[leg] for leg in LEGS if leg not in c.stance_legs]
     for task in terms:
@@ -41,9 +45,9 @@ def reference_terms(c, q, v):
         H[:NV, :NV] += J.T @ (weights[:, None] * J)
         f[:NV] += J.T @ (weights * (task.drift - task.desired_acceleration))
     f[:30] -= c._rate_weights * c._x_prev
-    contact = ContactTask(model, [f"{leg}_foot" for leg in LEGS], radius_m=FOOT_RADIUS_M,
-                          kd=c.config.contact_damping)
-    contact.update(model, data, q, v)
+    S = np.hstack([M[6:], -contact.jacobian[:, 6:].T])  # tau = S x + h_a
+    H[:30, :30] += c.config.torque_rate_weight * S.T @ S
+    f[:30] += c.config.torque_rate_weight * S.T @ (data.nle[6:] - c._tau_prev)
     return H, f, contact, data
 
 

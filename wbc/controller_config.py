@@ -22,7 +22,7 @@ class ControllerConfig:
     #: Friction coefficient of the contact model (below the floor's, for margin).
     friction_coefficient: float = 0.6
     #: Minimum normal force of a loaded stance foot [N].
-    min_normal_force_n: float = 10.0
+    min_normal_force_n: float = 8.0
     #: Maximum normal force of a stance foot [N].
     max_normal_force_n: float = 250.0
     #: Fraction of the URDF effort limits the controller may use (0.9: 10% headroom).
@@ -43,6 +43,9 @@ class ControllerConfig:
     acceleration_rate_weight: float = 1e-3
     #: Pull of the contact forces towards the previous tick's (smooth commands).
     force_rate_weight: float = 1e-3
+    #: Cost on the change of joint torques from the previous tick [1/(N m)^2]: smooth
+    #: commands across contact switches.
+    torque_rate_weight: float = 1e-2
     #: Regularisation of the accelerations (keeps the QP strictly convex).
     acceleration_weight: float = 1e-6
     #: Margin of the centre of mass inside the support polygon [m].

@@ -44,6 +44,10 @@ class LegLiftTiming:
     shift_back_s: float = 1.0
     #: Average foot speed [m/s] when an interrupted lift puts the foot down.
     unwind_speed_mps: float = 0.6
+    #: Average foot speed [m/s] when the lift is interrupted because balance is being lost.
+    urgent_speed_mps: float = 1.5
+    #: Reload time [s] when balance is being lost: the landed foot must carry load now.
+    urgent_reload_s: float = 0.05
     #: Reload and shift-back time [s] of an interrupted lift (they overlap).
     unwind_reload_s: float = 0.3
     unwind_shift_s: float = 0.5
@@ -72,7 +76,7 @@ class LegLift:
 
     def __init__(self, controller: BalanceController, *, leg: str = "FR",
                  height_m: float = 0.40, hold_s: float = 2.0, forward_m: float = 0.20,
-                 lateral_m: float = 0.0, shift_margin_m: float = 0.04,
+                 lateral_m: float = 0.0, shift_margin_m: float = 0.07,
                  touchdown_press_m: float = 0.001, timing: LegLiftTiming | None = None,
                  release_only: bool = False):
         """Args:
@@ -97,12 +101,13 @@ class LegLift:
         self.hold_s = as_float("hold_s", hold_s, low=0.0)
         self.forward_m = as_float("forward_m", forward_m, low=-0.1, high=0.3)
         self.lateral_m = as_float("lateral_m", lateral_m, low=-0.05, high=0.15)
-        self.shift_margin_m = as_float("shift_margin_m", shift_margin_m, low=0.0, high=0.07)
+        self.shift_margin_m = as_float("shift_margin_m", shift_margin_m, low=0.0, high=0.09)
         self.touchdown_press_m = as_float("touchdown_press_m", touchdown_press_m, low=0.0,
                                           high=0.01)
         self.timing = timing or LegLiftTiming()
         self.phase: LiftPhase | None = None
         self.interrupted = False
+        self.urgent = False
         self._progress = 0.0
 
     # ------------------------------------------------------------------ planning
@@ -182,6 +187,10 @@ class LegLift:
             ctrl.set_max_normal_force(self.leg, self._fmax_from * (1.0 - s))
             if done:
                 ctrl.set_swing(self.leg)
+                # The foot rolled while the body shifted: start from where it is, and land
+                # there, so that shifting back rolls it home.
+                self._foot_ref = ctrl.foot_position(self.leg)
+                self.foot_touch = self._foot_ref - np.array([0.0, 0.0, self.touchdown_press_m])
                 if self.release_only:
                     self._enter(LiftPhase.DONE, now_s, duration=0.0)
                 else:
@@ -193,8 +202,7 @@ class LegLift:
                 self._enter(LiftPhase.HOLDING, now_s, duration=self.hold_s)
             elif done:
                 ctrl.set_stance(self.leg, max_normal_force_n=0.0)
-                self._enter(LiftPhase.RELOADING, now_s,
-                            duration=t.unwind_reload_s if self.interrupted else t.reload_s)
+                self._enter(LiftPhase.RELOADING, now_s, duration=self._reload_s())
                 self._from, self._to = self._com_ref.copy(), self.com_home
                 self._shift_t0 = now_s
         elif phase is LiftPhase.HOLDING:
@@ -226,7 +234,9 @@ class LegLift:
         start = self._foot_ref.copy()
         if self.interrupted:
             distance = float(np.linalg.norm(end - start))
-            nominal_s = float(np.clip(distance / self.timing.unwind_speed_mps, 0.3, nominal_s))
+            speed, shortest = ((self.timing.urgent_speed_mps, 0.15) if self.urgent
+                               else (self.timing.unwind_speed_mps, 0.3))
+            nominal_s = float(np.clip(distance / speed, shortest, nominal_s))
         self._from, self._to = start, np.array(end, dtype=float)
         self._enter(phase, now_s, duration=nominal_s)
 
@@ -249,7 +259,8 @@ class LegLift:
         rate = np.array([dsxy * kxy, dsxy * kxy, dsz / T])
         accel = np.array([ddsxy * kxy * kxy, ddsxy * kxy * kxy, ddsz / (T * T)])
         self._foot_ref = self._from + scale * delta
-        self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta, accel * delta)
+        self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta, accel * delta,
+                                        clamp_to_reach=self.interrupted)
 
     @classmethod
     def put_down(cls, controller: BalanceController, leg: str, ground_point: np.ndarray,
@@ -275,12 +286,14 @@ class LegLift:
 
     # ------------------------------------------------------------------ interruption
 
-    def request_lower(self, now_s: float) -> None:
+    def request_lower(self, now_s: float, *, urgent: bool = False) -> None:
         """Interrupt: put the foot down and return to four loaded feet, from any phase.
 
-        The foot is lowered at ``unwind_speed_mps`` (at most ``lower_s``), then reloaded in
-        ``unwind_reload_s`` while the centre of mass shifts back in ``unwind_shift_s``.
+        The foot is lowered at ``unwind_speed_mps`` (``urgent_speed_mps`` when ``urgent``,
+        e.g. because balance is being lost), then reloaded in ``unwind_reload_s`` while the
+        centre of mass shifts back in ``unwind_shift_s``.
         """
+        self.urgent = self.urgent or urgent
         if self.phase is None or self.interrupted or self.phase is LiftPhase.DONE:
             self.interrupted = True
             return
@@ -294,13 +307,20 @@ class LegLift:
         elif self.phase in (LiftPhase.UNLOADING, LiftPhase.RELOADING):
             # Reload from the current bound at the unwind pace, shifting back meanwhile.
             s0 = ctrl.max_normal_force(self.leg) / ctrl.full_normal_force_n
-            self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * t.unwind_reload_s,
-                        duration=t.unwind_reload_s)
+            reload_s = self._reload_s()
+            self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * reload_s,
+                        duration=reload_s)
             self._from, self._to = self._com_ref.copy(), self.com_home
             self._shift_t0 = now_s
         elif self.phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
             self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         # SHIFTING_BACK already has four loaded feet and ends within shift_back_s.
+
+    def _reload_s(self) -> float:
+        t = self.timing
+        if self.urgent:
+            return t.urgent_reload_s
+        return t.unwind_reload_s if self.interrupted else t.reload_s
 
     @staticmethod
     def _inverse_ramp(s: float) -> float:

@@ -55,7 +55,7 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
              foot_ref, foot_gains,
              normals, offsets, n_edges, omega,
              tau_max, q_low, q_high, v_max, horizon,
-             h_const, rate_weights, x_prev,
+             h_const, rate_weights, x_prev, tau_prev, torque_rate_weight,
              H, f, A, lower, upper, lb, ub, jc, errors):
     """Fill the QP (``H, f, A, lower, upper`` and the joint rows of ``lb, ub``) for one tick.
 
@@ -74,6 +74,8 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         normals (4, 2), offsets (4,), n_edges, omega: support polygon barrier.
         tau_max, q_low, q_high, v_max, horizon: limits.
         h_const, rate_weights (30,), x_prev (30,): constant cost and smoothing.
+        tau_prev (12,), torque_rate_weight: cost ``w |tau(x) - tau_prev|^2`` on the torque
+            change from the previous tick, ``tau(x) = S x + h_a`` (S: the torque rows of A).
         H, f, A, lower, upper, lb, ub: the QP, written in place.
         jc (12, 18): written with the contact Jacobians (for torque recovery).
         errors (7,): written with error norms: com, base, posture, then the four feet.
@@ -203,6 +205,10 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         H[:NV, :NV] += w * (Jf.T @ Jf)
         f[:NV] += w * (Jf.T @ (foot_acc[i, :3] - des))
         errors[3 + i] = np.sqrt(np.sum(err * err))
-    # Smoothness: a pull towards the previous tick's solution.
+    # Smoothness: a pull towards the previous tick's solution, and on the torque change.
     for k in range(S):
         f[k] -= rate_weights[k] * x_prev[k]
+    if torque_rate_weight > 0.0:
+        Sm = A[TAU:TAU + NJ, :S]
+        H[:S, :S] += torque_rate_weight * (Sm.T @ Sm)
+        f[:S] += torque_rate_weight * (Sm.T @ (h[6:] - tau_prev))

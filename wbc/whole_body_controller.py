@@ -177,6 +177,10 @@ class WholeBodyController:
         """Centre of mass [m] at the last state."""
         return self.data.com[0].copy()
 
+    def com_velocity(self) -> np.ndarray:
+        """Centre-of-mass velocity [m/s] at the last state."""
+        return self.data.vcom[0].copy()
+
     def foot_position(self, leg: str) -> np.ndarray:
         """World position [m] of a foot frame (sphere centre) at the last state."""
         check_name("leg", leg, LEGS)
@@ -192,16 +196,29 @@ class WholeBodyController:
         return self.data.oMi[1].act(self._shoulder_in_base[leg])
 
     @property
+    def min_normal_force_n(self) -> float:
+        """The minimum normal force [N] of a loaded stance foot."""
+        return self.config.min_normal_force_n
+
+    @property
+    def total_mass_kg(self) -> float:
+        """The model's total mass [kg]."""
+        return self.description.total_mass
+
+    @property
     def full_normal_force_n(self) -> float:
         """The normal-force bound [N] of a fully loaded stance foot."""
         return self.config.max_normal_force_n
 
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
-                        acceleration: np.ndarray | None = None) -> None:
+                        acceleration: np.ndarray | None = None, *,
+                        clamp_to_reach: bool = False) -> None:
         """World target [m], velocity [m/s] and feed-forward acceleration of a foot.
 
-        Tracked while the leg swings.
+        Tracked while the leg swings. With ``clamp_to_reach`` a target beyond the leg's
+        reach is moved onto it (for motion generators that must never stop) instead of
+        raising.
 
         Raises:
             ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
@@ -212,7 +229,9 @@ class WholeBodyController:
         if self._q is not None:
             shoulder = self.shoulder_position(leg)
             distance = float(np.linalg.norm(position - shoulder))
-            if distance > LEG_REACH_M:
+            if distance > LEG_REACH_M and clamp_to_reach:
+                position = shoulder + (position - shoulder) * (LEG_REACH_M / distance)
+            elif distance > LEG_REACH_M:
                 raise ReachabilityError(
                     f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
                     f"the {leg} shoulder; reachable: at most {LEG_REACH_M:.2f} m"
@@ -301,10 +320,23 @@ class WholeBodyController:
         t2 = time.perf_counter()
         result = self.backend.solve(self.problem)
         t3 = time.perf_counter()
+        status, message, group = ControlStatus.OK, "", ""
         if not result.found:
-            return self._fallback(v, f"QP failed: {result.reason}", t0, result=result)
+            self.failures += 1
+            group, relaxed = self.diagnose()
+            message = f"QP failed: {result.reason}"
+            if group:
+                message += f"; infeasible constraint group: {group}"
+            # The solver's workspace may hold a bad state after a failure.
+            self.backend.setup(self.problem)
+            if relaxed is None:
+                return self._fallback(v, message, t0, group=group)
+            result, status = relaxed, ControlStatus.RELAXED
+            message += "; commanded the solution with that group relaxed"
         x = result.x
         tau = self.problem.A[_TAU, :_S] @ x[:_S] + self.data.nle[6:]
+        if status is ControlStatus.RELAXED:
+            np.clip(tau, -self.tau_max, self.tau_max, out=tau)
         self._x_prev[:] = x[:_S]
         self.last_solution = x
         self._tau_prev = tau
@@ -316,7 +348,8 @@ class WholeBodyController:
         t4 = time.perf_counter()
         return ControlOutput(
             tau=tau, qdd=x[:_NV].copy(), forces=x[_F0:_S].reshape(_NC, 3).copy(),
-            status=ControlStatus.OK, task_errors=task_errors,
+            status=status, message=message,
+            infeasible_group=group, task_errors=task_errors,
             timings={"model": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2,
                      "total": t4 - t0},
         )
@@ -419,8 +452,8 @@ class WholeBodyController:
             self._foot_refs, self._foot_gains,
             self._normals, self._offsets, self._n_edges, cfg.support_omega,
             self.tau_max, self._q_low, self._q_high, self._v_max, cfg.joint_limit_horizon_s,
-            self._h_const, self._rate_weights, self._x_prev,
-            p.H, p.f, p.A, p.lower, p.upper, p.lb, p.ub, self._jc, self._errors)
+            self._h_const, self._rate_weights, self._x_prev, self._tau_prev,
+            cfg.torque_rate_weight, p.H, p.f, p.A, p.lower, p.upper, p.lb, p.ub, self._jc, self._errors)
 
     # ------------------------------------------------------------------ failures
 
@@ -435,10 +468,19 @@ class WholeBodyController:
         self._x_prev[[_F0 + r for r in rows]] = forces
         return gravity[6:] - jc[:, 6:].T @ forces
 
-    def _fallback(self, v: np.ndarray, message: str, t0: float,
-                  result: QpResult | None = None) -> ControlOutput:
+    def safe_command(self, v: np.ndarray, message: str) -> ControlOutput:
+        """The safe fallback command for velocity ``v``, with status FALLBACK and ``message``.
+
+        For a caller that finds a command unusable after the controller produced it (a guard
+        in the control loop, a fault detected downstream).
+        """
+        return self._fallback(v, message, time.perf_counter())
+
+    def _fallback(self, v: np.ndarray, message: str, t0: float, *,
+                  group: str = "") -> ControlOutput:
         """Safe command: the last good torques with joint damping, inside the limits."""
-        self.failures += 1
+        if not group:  # QP failures were counted where they happened
+            self.failures += 1
         vj = np.zeros(_NJ)
         v = np.asarray(v, dtype=float).reshape(-1)
         if v.shape == (_NV,):
@@ -446,46 +488,48 @@ class WholeBodyController:
         tau = np.clip(self._tau_good - self.config.fallback_damping * vj, -self.tau_max,
                       self.tau_max)
         self._tau_prev = tau
-        group = self.diagnose() if result is not None else ""
-        if group:
-            message += f"; infeasible constraint group: {group}"
-        # The solver's workspace may hold a bad active set after a failure.
-        self.backend.setup(self.problem)
         return ControlOutput(
             tau=tau, qdd=np.full(_NV, np.nan), forces=np.full((_NC, 3), np.nan),
             status=ControlStatus.FALLBACK, message=message, infeasible_group=group,
             timings={"total": time.perf_counter() - t0},
         )
 
-    def diagnose(self) -> str:
-        """Name the constraint group that makes the current QP infeasible ('' if none).
+    def diagnose(self) -> tuple[str, QpResult | None]:
+        """Name the constraint group that makes the current QP infeasible.
 
         Re-solves copies of the problem with one group relaxed at a time (off the hot path,
         only after a failure), limits before physics; the first group whose relaxation
-        makes it solvable is named.
+        makes it solvable is named. Returns the name ('' if none) and, when that group is a
+        limit (not physics), the relaxed problem's solution, usable as a command.
         """
         from wbc.backends.daqp_backend import DaqpBackend
 
+        def rows(group: slice):
+            def relax(trial: QpProblem) -> None:
+                trial.lower[group], trial.upper[group] = -INFINITY, INFINITY
+                trial.is_equality[group] = False
+            return relax
+
+        def normal_force(trial: QpProblem) -> None:  # never a pull on the floor
+            trial.lb[_F0 + 2:_S:3] = np.minimum(trial.lb[_F0 + 2:_S:3], 0.0)
+            trial.ub[_F0 + 2:_S:3] = np.where(trial.ub[_F0 + 2:_S:3] > 0.0, INFINITY, 0.0)
+
+        def joint_limits(trial: QpProblem) -> None:
+            trial.lb[6:_NV], trial.ub[6:_NV] = -INFINITY, INFINITY
+
         # Limits first: relaxing the physics (dynamics, stance contacts) would make almost
         # any problem feasible by letting the robot fall, which names nothing useful.
-        groups: list[tuple[str, Any]] = [
-            ("torque limits", _TAU), ("normal force bounds", "fz"), ("friction", _FRIC),
-            ("joint limits", "joints"), ("support polygon", _SUP),
-            ("stance contacts", _CON), ("dynamics", _DYN),
-        ]
-        for name, rows in groups:
+        groups = [("torque limits", rows(_TAU), True), ("normal force bounds", normal_force, True),
+                  ("friction", rows(_FRIC), True), ("joint limits", joint_limits, True),
+                  ("support polygon", rows(_SUP), True),
+                  ("stance contacts", rows(_CON), False), ("dynamics", rows(_DYN), False)]
+        for name, relax, usable in groups:
             trial = self.problem.copy()
-            if isinstance(rows, slice):
-                trial.lower[rows], trial.upper[rows] = -INFINITY, INFINITY
-                trial.is_equality[rows] = False
-            elif rows == "fz":
-                trial.lb[_F0 + 2:_S:3], trial.ub[_F0 + 2:_S:3] = -INFINITY, INFINITY
-            else:
-                trial.lb[6:_NV], trial.ub[6:_NV] = -INFINITY, INFINITY
-            solver = DaqpBackend()
-            if solver.solve(trial).found:
-                return name
-        return ""
+            relax(trial)
+            result = DaqpBackend().solve(trial)
+            if result.found:
+                return name, result if usable else None
+        return "", None
 
 
 def warm_up() -> None:
