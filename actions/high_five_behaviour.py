@@ -26,6 +26,9 @@ PHASE_NAMES = {
     LiftPhase.LOWERING: "lowering", LiftPhase.RELOADING: "reloading",
     LiftPhase.SHIFTING_BACK: "shifting_back", LiftPhase.DONE: "complete",
 }
+#: Consecutive damping fallbacks [ticks] after which the goal ends at once: the
+#: controller cannot carry out an unwind any more.
+FAULT_LIMIT_TICKS = 50
 #: Share of the progress bar the stand-up takes when the robot is not standing.
 _STAND_SHARE = 0.15
 
@@ -53,8 +56,11 @@ def validate_high_five_goal(context: RobotContext, goal: HighFiveGoal) -> GoalRe
 class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback]):
     """Stand first if needed; shift onto three legs; raise, hold, lower; back on four legs.
 
-    Watches the balance while a foot is unloaded or raised: a tilt above 12 deg or a centre
-    of mass within 4 mm of the support edge puts the foot down and ends ABORTED.
+    Watches the balance while a foot is unloaded or raised: a tilt above 12 deg, or the
+    capture point leaving the three feet's support polygon, puts the foot down fast and
+    ends ABORTED. So does a
+    controller fault (a fallback tick); a fault lasting ``FAULT_LIMIT_TICKS`` ends the goal
+    ABORTED at once.
     """
 
     def __init__(self, context: RobotContext, *, leg: str = "FR"):
@@ -83,12 +89,28 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
             self._lift.start(now_s)
 
     def step(self, now_s: float) -> StepResult[HighFiveResult, HighFiveFeedback]:
+        fault = self.context.fault
+        if fault:
+            if self.context.consecutive_fallbacks >= FAULT_LIMIT_TICKS:
+                return StepResult.aborted(HighFiveResult(success=False, message=(
+                    f"aborted: controller fault for {self.context.consecutive_fallbacks} ticks "
+                    f"({fault}); the robot holds its joints with damping")),
+                    self._feedback(now_s, "aborted"))
+            if not self._abort_reason:
+                self._abort_reason = f"controller fault ({fault})"
+                if self._stand is not None:
+                    self._stand.stop()
+                elif self._lift is not None and self._lift.phase is not None:
+                    self._lift.request_lower(now_s, urgent=True)
         if self._stand is not None:
             phase = self._stand.update(now_s)
             self._progress = max(self._progress, _STAND_SHARE * self._stand.progress)
             if phase is not TransitionPhase.DONE:
                 return StepResult.running(self._feedback(now_s, "standing"))
             self._stand = None
+            if self._abort_reason:
+                return StepResult.aborted(HighFiveResult(success=False, message=(
+                    f"aborted: {self._abort_reason}")), self._feedback(now_s, "aborted"))
             if self._cancel_reason:
                 return self._canceled(now_s)
             try:
@@ -102,8 +124,8 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
                 LiftPhase.UNLOADING, LiftPhase.RAISING, LiftPhase.HOLDING):
             problem = self.context.balance_problem()
             if problem:
-                self._abort_reason = problem
-                lift.request_lower(now_s)
+                self._abort_reason = f"balance was being lost ({problem})"
+                lift.request_lower(now_s, urgent=True)
         phase = lift.update(now_s)
         start = _STAND_SHARE if self._stood else 0.0
         self._progress = max(self._progress, start + (1.0 - start) * lift.progress)
@@ -111,8 +133,8 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
             return StepResult.running(self._feedback(now_s, PHASE_NAMES[phase]))
         if self._abort_reason:
             return StepResult.aborted(HighFiveResult(success=False, message=(
-                f"aborted: balance was being lost ({self._abort_reason}); the foot was put "
-                "down and the robot is back on four feet")), self._feedback(now_s, "aborted"))
+                f"aborted: {self._abort_reason}; the foot was put down and the robot is back "
+                "on four feet")), self._feedback(now_s, "aborted"))
         if self._cancel_reason:
             return self._canceled(now_s)
         return StepResult.succeeded(HighFiveResult(success=True, message=(

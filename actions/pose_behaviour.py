@@ -58,6 +58,11 @@ class PoseBehaviour(Behaviour[PoseGoal, Any, Any]):
 
     def step(self, now_s: float) -> StepResult[Any, Any]:
         transition = self._transition
+        if self.context.fault:
+            transition.stop()
+            return StepResult.aborted(self.result_type(success=False, message=(
+                f"aborted: controller fault ({self.context.fault})")),
+                self._feedback(now_s, "aborted", transition.progress))
         phase = transition.update(now_s)
         if phase is not TransitionPhase.DONE:
             name = "placing_foot" if phase is TransitionPhase.PLACING_FOOT else self.phase_name

@@ -7,13 +7,14 @@ import math
 import numpy as np
 
 from wbc.balance_controller import BalanceController
-from wbc.control_output import ControlOutput
+from wbc.control_output import ControlOutput, ControlStatus
 from wbc.support_polygon import SupportPolygon
 
 #: Above this base tilt [deg] the robot is losing its balance.
 TILT_LIMIT_DEG = 12.0
-#: Below this centre-of-mass margin [m] inside the support polygon the robot is losing it.
-MARGIN_LIMIT_M = 0.004
+#: Below this capture-point margin [m] inside the support polygon the robot is losing it.
+CAPTURE_MARGIN_LIMIT_M = 0.0
+_GRAVITY = 9.81
 #: The base is at least this high [m] when standing.
 STANDING_HEIGHT_M = 0.25
 
@@ -28,6 +29,19 @@ class RobotContext:
         self.v = np.zeros(18)
         self.now_s = 0.0
         self.last_output: ControlOutput | None = None
+        #: Why the last tick was not OK ('' when it was).
+        self.fault = ""
+        #: Ticks in a row the controller could only send its damping fallback.
+        self.consecutive_fallbacks = 0
+
+    def record_output(self, out: ControlOutput) -> None:
+        """Record the command sent this tick; any tick that is not OK is a controller fault."""
+        self.last_output = out
+        self.fault = "" if out.ok else out.message
+        if out.status is ControlStatus.FALLBACK:
+            self.consecutive_fallbacks += 1
+        else:
+            self.consecutive_fallbacks = 0
 
     def observe(self, now_s: float, q: np.ndarray, v: np.ndarray) -> None:
         """Record the state measured at ``now_s`` [s] (before the behaviours run)."""
@@ -46,6 +60,27 @@ class RobotContext:
         points = np.array([self.controller.foot_position(leg)[:2] for leg in legs])
         return SupportPolygon.signed_distance(points, self.controller.com_position())
 
+    def capture_margin_m(self) -> float:
+        """Capture point's distance [m] inside the polygon where the ZMP can be.
+
+        The capture point ``c + c_dot / omega0`` (``omega0 = sqrt(g / z_com)``) is where the
+        centre of mass would come to rest over. The ZMP can only be where every support foot
+        carries at least the controller's minimum normal force: the support polygon shrunk
+        about its centroid by ``1 - n f_min / (m g)``. With the capture point outside it, the
+        robot cannot stop without changing its support (here: putting the raised foot down).
+        """
+        legs = self.controller.support_legs()
+        if len(legs) < 3:
+            return -math.inf
+        com = self.controller.com_position()
+        omega0 = math.sqrt(_GRAVITY / max(com[2], 0.05))
+        capture = com[:2] + self.controller.com_velocity()[:2] / omega0
+        points = np.array([self.controller.foot_position(leg)[:2] for leg in legs])
+        weight = self.controller.total_mass_kg * _GRAVITY
+        shrink = max(0.0, 1.0 - len(legs) * self.controller.min_normal_force_n / weight)
+        centre = points.mean(axis=0)
+        return SupportPolygon.signed_distance(centre + shrink * (points - centre), capture)
+
     def is_upright(self) -> bool:
         """The base is level enough and high enough to stand."""
         return self.tilt_deg() < TILT_LIMIT_DEG and self.q[2] > 0.08
@@ -60,8 +95,9 @@ class RobotContext:
         tilt = self.tilt_deg()
         if tilt > TILT_LIMIT_DEG:
             return f"base tilt {tilt:.1f} deg above {TILT_LIMIT_DEG:.0f} deg"
-        margin = self.com_margin_m()
-        if margin < MARGIN_LIMIT_M:
-            return (f"centre of mass {margin * 1e3:.1f} mm from the support edge "
-                    f"(limit {MARGIN_LIMIT_M * 1e3:.0f} mm)")
+        margin = self.capture_margin_m()
+        if margin < CAPTURE_MARGIN_LIMIT_M:
+            return (f"capture point {-margin * 1e3:.1f} mm outside the polygon the feet can "
+                    f"hold the ZMP in; centre of mass {self.com_margin_m() * 1e3:.1f} mm inside "
+                    "the support polygon")
         return ""

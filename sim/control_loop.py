@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
+
+import numpy as np
 
 from actions.action_client import ActionClient
 from actions.action_runner import ActionRunner, BusyPolicy
@@ -13,6 +16,7 @@ from sim.mujoco_robot import MujocoRobot
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput
+from wbc.description import JOINT_NAMES, Go2Description
 from wbc.whole_body_controller import WholeBodyController
 
 TickHook = Callable[["ControlLoop", ControlOutput], None]
@@ -47,6 +51,7 @@ class ControlLoop:
         self.runner.set_spinner(self.spin_once)
         q, v = self.robot.read_state()
         controller.reset(q, v)
+        self._effort_limit = Go2Description().effort_limit
         self.context.observe(self.robot.time_s, q, v)
         self.hooks: list[TickHook] = []
         self.last_output: ControlOutput | None = None
@@ -72,13 +77,24 @@ class ControlLoop:
         q, v = self.robot.read_state()
         self.context.observe(now, q, v)
         self.runner.tick(now)
-        out = self.controller.step(q, v)
-        self.context.last_output = out
+        out = self._guard(self.controller.step(q, v), v)
+        self.context.record_output(out)
         self.last_output = out
         self.robot.write_torques(out.tau)
         for hook in self.hooks:
             hook(self, out)
         return out
+
+    def _guard(self, out: ControlOutput, v) -> ControlOutput:
+        """Never send a non-finite torque or one beyond the effort limits: fall back."""
+        tau = out.tau
+        limit = self._effort_limit
+        if tau.shape == limit.shape and math.isfinite(tau.sum()) and np.all(np.abs(tau) <= limit):
+            return out
+        bad = np.flatnonzero(~np.isfinite(tau) | (np.abs(tau) > limit)) if tau.shape == limit.shape else []
+        return self.controller.safe_command(
+            v, f"command rejected: torques non-finite or beyond the effort limits at joints "
+               f"{[JOINT_NAMES[i] for i in bad]}")
 
     def spin_for(self, seconds: float) -> None:
         """Run for ``seconds`` of robot time."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -11,6 +12,9 @@ import numpy as np
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float, check_name
+
+if TYPE_CHECKING:
+    from sim.disturbances import PlantChanges
 
 #: Collision groups: robot geoms touch the floor but not each other.
 _ROBOT_CONTYPE, _ROBOT_CONAFFINITY = 2, 1
@@ -23,6 +27,7 @@ def build_go2_spec(
     timestep_s: float = 1e-3,
     floor_friction: float = 1.0,
     actuator_order: Sequence[str] | None = None,
+    plant: PlantChanges | None = None,
 ) -> mujoco.MjSpec:
     """A MuJoCo spec of the GO2 on a flat floor, ready to compile.
 
@@ -37,6 +42,8 @@ def build_go2_spec(
         floor_friction: Sliding friction coefficient between the feet and the floor.
         actuator_order: Joint names in the order the actuators are listed (description order
             by default); another order, e.g. the Unitree SDK's, is wired by name.
+        plant: Differences from the controller's model (payload, joint damping, ...); its
+            ``floor_friction`` replaces the argument of that name.
     """
     description = description or Go2Description()
     timestep_s = as_float("timestep_s", timestep_s, low=1e-5, high=0.01)
@@ -104,4 +111,6 @@ def build_go2_spec(
             ctrllimited=True,
             ctrlrange=[-effort[name], effort[name]],
         )
+    if plant is not None:
+        plant.apply(spec)
     return spec

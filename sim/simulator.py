@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from sim.disturbances import PlantChanges
 from sim.scene import build_go2_spec
 from wbc.conventions import mujoco_to_pin, pin_to_mujoco
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
@@ -45,6 +46,7 @@ class Go2Simulator:
         floor_friction: float = 1.0,
         actuator_order: Sequence[str] | None = None,
         description: Go2Description | None = None,
+        plant: PlantChanges | None = None,
     ):
         """Args:
             timestep_s: Physics timestep [s].
@@ -52,10 +54,13 @@ class Go2Simulator:
             actuator_order: Joint names in the plant's actuator order (description order by
                 default).
             description: The robot files (found automatically by default).
+            plant: Differences from the controller's model (see
+                :class:`sim.disturbances.PlantChanges`).
         """
         self.description = description or Go2Description()
         self.spec = build_go2_spec(self.description, timestep_s=timestep_s,
-                                   floor_friction=floor_friction, actuator_order=actuator_order)
+                                   floor_friction=floor_friction, actuator_order=actuator_order,
+                                   plant=plant)
         self.model = self.spec.compile()
         self.data = mujoco.MjData(self.model)
         #: Plant actuator order <-> description order.

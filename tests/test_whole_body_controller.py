@@ -110,16 +110,17 @@ def test_wrong_state_shape_falls_back(controller, standing):
     assert "expected q (19,) and v (18,), received (18,) and (18,)" in out.message
 
 
-def test_infeasible_qp_names_the_group_and_stays_usable(standing):
+def test_infeasible_qp_names_the_group_and_commands_the_relaxed_solution(standing):
     c = WholeBodyController(torque_limit_fraction=0.01)
     c.reset(standing)
     out = c.step(standing, np.zeros(18))
-    assert out.status is ControlStatus.FALLBACK
+    assert out.status is ControlStatus.RELAXED
     assert out.infeasible_group == "torque limits"
-    assert "infeasible constraint group: torque limits" in out.message
+    assert out.message == ("QP failed: DAQP: infeasible; infeasible constraint group: torque "
+                           "limits; commanded the solution with that group relaxed")
     assert np.all(np.abs(out.tau) <= c.tau_max + 1e-12)
     assert c.failures == 1
-    assert c.step(standing, np.zeros(18)).status is ControlStatus.FALLBACK  # still consistent
+    assert c.step(standing, np.zeros(18)).status is ControlStatus.RELAXED  # still consistent
 
 
 def test_fallback_damps_joint_velocity(controller, standing):

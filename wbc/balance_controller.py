@@ -22,6 +22,9 @@ class BalanceController(Protocol):
     def step(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
         """One control tick; never raises on a failed solve or a bad state."""
 
+    def safe_command(self, v: np.ndarray, message: str) -> ControlOutput:
+        """The safe fallback command (status FALLBACK, with ``message``)."""
+
     @property
     def stance_legs(self) -> list[str]:
         """Legs in stance."""
@@ -32,6 +35,14 @@ class BalanceController(Protocol):
     @property
     def com_target(self) -> np.ndarray:
         """The centre-of-mass target (a copy)."""
+
+    @property
+    def min_normal_force_n(self) -> float:
+        """Minimum normal force of a loaded stance foot."""
+
+    @property
+    def total_mass_kg(self) -> float:
+        """The model's total mass."""
 
     @property
     def full_normal_force_n(self) -> float:
@@ -55,6 +66,9 @@ class BalanceController(Protocol):
     def com_position(self) -> np.ndarray:
         """Centre of mass at the last state."""
 
+    def com_velocity(self) -> np.ndarray:
+        """Centre-of-mass velocity at the last state."""
+
     def foot_position(self, leg: str) -> np.ndarray:
         """Foot frame position at the last state."""
 
@@ -67,7 +81,8 @@ class BalanceController(Protocol):
 
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
-                        acceleration: np.ndarray | None = None) -> None:
+                        acceleration: np.ndarray | None = None, *,
+                        clamp_to_reach: bool = False) -> None:
         """Swing-foot reference."""
 
     def max_normal_force(self, leg: str) -> float:

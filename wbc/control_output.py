@@ -13,7 +13,11 @@ class ControlStatus(enum.Enum):
 
     #: The QP was solved; ``tau`` is the whole-body command.
     OK = "ok"
-    #: The QP failed (infeasible, solver error, bad state); ``tau`` is the safe fallback.
+    #: The QP was infeasible; ``tau`` solves it with the named limit group relaxed (and is
+    #: clipped to the torque limits): the safest command while the robot is pushed hard.
+    RELAXED = "relaxed"
+    #: No usable solution (solver error, bad state, infeasible physics); ``tau`` is the safe
+    #: fallback, the last good torques with joint damping.
     FALLBACK = "fallback"
 
 

@@ -1,0 +1,180 @@
+"""Disturbances for robustness runs: plant changes, sensor noise, control delay, pushes.
+
+Everything is seeded and happens in simulated time, so a run with the same settings and
+seed is the same run.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from actions.robot_interface import RobotInterface
+from wbc.validation import as_float, as_vector
+
+
+@dataclass(frozen=True)
+class PlantChanges:
+    """How the simulated robot differs from the controller's model.
+
+    Attributes:
+        floor_friction: Foot-floor friction coefficient (the controller assumes 0.6).
+        base_payload_kg: Mass added at the base's centre [kg] (unknown to the controller).
+        joint_damping: Viscous damping of every joint [N m s/rad].
+        joint_friction_loss: Dry friction of every joint [N m].
+        rotor_armature: Reflected rotor inertia added to every joint [kg m^2].
+    """
+
+    floor_friction: float = 1.0
+    base_payload_kg: float = 0.0
+    joint_damping: float = 0.0
+    joint_friction_loss: float = 0.0
+    rotor_armature: float = 0.0
+
+    def __post_init__(self) -> None:
+        as_float("floor_friction", self.floor_friction, low=0.05, high=5.0)
+        as_float("base_payload_kg", self.base_payload_kg, low=0.0, high=10.0)
+        as_float("joint_damping", self.joint_damping, low=0.0, high=10.0)
+        as_float("joint_friction_loss", self.joint_friction_loss, low=0.0, high=5.0)
+        as_float("rotor_armature", self.rotor_armature, low=0.0, high=1.0)
+
+    @classmethod
+    def menagerie_like(cls) -> PlantChanges:
+        """Joint damping, friction loss and armature of MuJoCo Menagerie's GO2 (0.1, 0.2, 0.01)."""
+        return cls(joint_damping=0.1, joint_friction_loss=0.2, rotor_armature=0.01)
+
+    def apply(self, spec: mujoco.MjSpec) -> None:
+        """Change a GO2 spec built by :func:`sim.scene.build_go2_spec` in place."""
+        for geom in spec.geoms:
+            if geom.name == "floor" or geom.name.endswith("_foot_sphere"):
+                geom.friction = [self.floor_friction, *list(geom.friction)[1:]]
+        for joint in spec.joints:
+            if joint.type == mujoco.mjtJoint.mjJNT_HINGE:
+                joint.damping = [self.joint_damping, 0.0, 0.0]  # linear term only
+                joint.frictionloss = self.joint_friction_loss
+                joint.armature = self.rotor_armature
+        if self.base_payload_kg > 0.0:
+            payload = spec.body("base").add_body(name="payload", pos=[0.0, 0.0, 0.0])
+            payload.mass = self.base_payload_kg
+            # A 20 cm x 10 cm x 5 cm box of that mass.
+            m = self.base_payload_kg
+            payload.inertia = [m * (0.1**2 + 0.05**2) / 12, m * (0.2**2 + 0.05**2) / 12,
+                               m * (0.2**2 + 0.1**2) / 12]
+            payload.explicitinertial = True
+
+
+@dataclass
+class NoisyDelayedRobot:
+    """A robot whose joint sensors are noisy and whose commands arrive late.
+
+    Wraps a :class:`~actions.robot_interface.RobotInterface` (same joint order).
+
+    Attributes:
+        robot: The robot.
+        position_noise_rad: Standard deviation of the joint-position noise [rad].
+        velocity_noise_rad_s: Standard deviation of the joint-velocity noise [rad/s].
+        delay_ticks: Control periods between a command and its application.
+        seed: Seed of the noise.
+    """
+
+    robot: RobotInterface
+    position_noise_rad: float = 0.0
+    velocity_noise_rad_s: float = 0.0
+    delay_ticks: int = 0
+    seed: int = 0
+    _rng: np.random.Generator = field(init=False, repr=False)
+    _queue: deque = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        as_float("position_noise_rad", self.position_noise_rad, low=0.0, high=0.5)
+        as_float("velocity_noise_rad_s", self.velocity_noise_rad_s, low=0.0, high=50.0)
+        if isinstance(self.delay_ticks, bool) or not isinstance(self.delay_ticks, int) or not (
+                0 <= self.delay_ticks <= 100):
+            from wbc.errors import ConfigurationError
+
+            raise ConfigurationError(
+                f"delay_ticks: expected a whole number in [0, 100], received {self.delay_ticks!r}")
+        self._rng = np.random.default_rng(self.seed)
+        self._queue = deque()
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The robot's joint order."""
+        return self.robot.joint_names
+
+    @property
+    def time_s(self) -> float:
+        """The robot's clock [s]."""
+        return self.robot.time_s
+
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's state with Gaussian noise on the joint positions and velocities."""
+        q, v = self.robot.read_state()
+        n = len(q) - 7
+        if self.position_noise_rad:
+            q[7:] += self._rng.normal(0.0, self.position_noise_rad, n)
+        if self.velocity_noise_rad_s:
+            v[6:] += self._rng.normal(0.0, self.velocity_noise_rad_s, n)
+        return q, v
+
+    def write_torques(self, tau: np.ndarray) -> None:
+        """Queue a command; the one from ``delay_ticks`` periods ago is applied."""
+        self._queue.append(np.array(tau, dtype=float))
+        if len(self._queue) <= self.delay_ticks:
+            self.robot.write_torques(self._queue[0])  # the first command, until the queue fills
+            return
+        self.robot.write_torques(self._queue.popleft())
+
+
+@dataclass(frozen=True)
+class Push:
+    """A force on a body for a while, starting at a simulated time.
+
+    Attributes:
+        at_s: Start time [s]. force_n: Magnitude [N]. duration_s: Duration [s].
+        direction_deg: Direction in the horizontal plane (0 forward, 90 left, 270 right).
+        body: The body pushed (``base``, or ``FR_foot`` for a hand on the raised foot).
+        vertical_n: A vertical component [N] (positive up).
+    """
+
+    at_s: float
+    force_n: float
+    duration_s: float
+    direction_deg: float = 0.0
+    body: str = "base"
+    vertical_n: float = 0.0
+
+    @property
+    def impulse_ns(self) -> float:
+        """Horizontal impulse [N s]."""
+        return self.force_n * self.duration_s
+
+    def vector(self) -> np.ndarray:
+        """World force [N]."""
+        angle = math.radians(self.direction_deg)
+        return np.array([self.force_n * math.cos(angle), self.force_n * math.sin(angle),
+                         self.vertical_n])
+
+
+class PushSchedule:
+    """Applies pushes at their times: add it to a :class:`sim.control_loop.ControlLoop`'s hooks.
+
+    Example:
+        >>> loop.hooks.append(PushSchedule(loop.sim, [Push(at_s=4.0, force_n=30, duration_s=0.1)]))
+    """
+
+    def __init__(self, sim, pushes: list[Push]):
+        self.sim = sim
+        self.pending = sorted(pushes, key=lambda p: p.at_s)
+        self.applied: list[tuple[float, Push]] = []
+
+    def __call__(self, loop, out) -> None:
+        now = self.sim.time_s
+        while self.pending and self.pending[0].at_s <= now + 1e-9:
+            push = self.pending.pop(0)
+            self.sim.apply_force(push.vector(), push.duration_s, body=push.body)
+            self.applied.append((now, push))
