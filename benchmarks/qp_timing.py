@@ -50,7 +50,8 @@ from wbc.backends import missing_backends
 
 LEG, HEIGHT_M = "FR", 0.40
 WARMUP_TICKS = 200
-STAGES = ("model", "tasks", "assembly", "solve", "total")
+#: Stages of ControlOutput.timings (our controller computes task terms inside "assembly").
+STAGES = ("model", "assembly", "solve", "total")
 PLACO = "placo"
 DEFAULT = "default"
 #: Quick timing episodes: a faster shift and unload, stopped after this much lift time [s].
@@ -302,7 +303,7 @@ def format_report(report: dict[str, Any]) -> str:
     lines = [(f"Machine: {m['cpu']}, {m['cores']} cores, load {load:.2f} at start, "
              f"Python {m['python']}; {versions}"),
              f"Mode: {report['mode']}. {report['episode']['description']}", ""]
-    head = (f"{'backend':<22}{'ticks':>6}{'model':>7}{'tasks':>7}{'asm':>7}{'solve':>8}"
+    head = (f"{'backend':<22}{'ticks':>6}{'model':>7}{'asm':>7}{'solve':>8}"
             f"{'median':>8}{'p90':>8}{'p99':>8}{'max':>8}{'eq viol':>9}{'ineq viol':>10}"
             f"{'fail':>5}{'x PlaCo':>8}{'cpu med':>8}{'x PlaCo':>8}{'cpu%':>5}")
     lines += ["Tick time [us] per backend (stage columns: medians)", head, "-" * len(head)]
@@ -312,7 +313,7 @@ def format_report(report: dict[str, Any]) -> str:
             continue
         st = row["stage_median_us"]
         lines.append(
-            f"{row['name']:<22}{row['ticks']:>6}{_fmt(st['model']):>7}{_fmt(st['tasks']):>7}"
+            f"{row['name']:<22}{row['ticks']:>6}{_fmt(st['model']):>7}"
             f"{_fmt(st['assembly']):>7}{_fmt(st['solve']):>8}{_fmt(row['median_us']):>8}"
             f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}{_fmt(row['max_us']):>8}"
             f"{_fmt(row['max_eq_violation'], -1):>9}{_fmt(row['max_ineq_violation'], -1):>10}"

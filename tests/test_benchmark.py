@@ -51,7 +51,7 @@ def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
             # Tight-tolerance solvers: a solution that breaks its own constraints is a bug.
             assert row["max_eq_violation"] < 1e-5 and row["max_ineq_violation"] < 1e-5, name
     assert rows["placo"]["ratio_to_placo"] == pytest.approx(1.0)
-    assert rows["placo"]["stage_median_us"]["tasks"] is None
+    assert rows["placo"]["stage_median_us"]["assembly"] is None
     assert rows["daqp"]["failures"] == 0
 
 

@@ -15,7 +15,8 @@ def min_jerk(tau: float) -> tuple[float, float, float]:
     if tau >= 1.0:
         return 1.0, 0.0, 0.0
     t2 = tau * tau
-    s = t2 * tau * (10.0 - 15.0 * tau + 6.0 * t2)
+    # Rounding can push the polynomial a hair past 1 just before the end: clamp it.
+    s = min(1.0, t2 * tau * (10.0 - 15.0 * tau + 6.0 * t2))
     ds = 30.0 * t2 * (1.0 - tau) ** 2
     dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
     return s, ds, dds

@@ -44,16 +44,24 @@ class QpsolversBackend(QpBackend):
 
     def solve(self, problem: QpProblem) -> QpResult:
         start = time.perf_counter()
+        lb = np.where(problem.lb <= -INFINITY, -np.inf, problem.lb)
+        ub = np.where(problem.ub >= INFINITY, np.inf, problem.ub)
+        # A variable pinned by equal bounds (a released foot's force) is an equality row:
+        # some solvers (quadprog) read lb == ub as two opposite inequalities and fail, and
+        # rows on pinned variables alone (its friction rows, 0 <= 0) are dependent: dropped.
+        pinned = np.flatnonzero(lb == ub)
+        free = np.ones(problem.n, dtype=bool)
+        free[pinned] = False
         eq = problem.is_equality
-        ineq = ~eq
+        ineq = ~eq & np.any(problem.A[:, free] != 0.0, axis=1)
         has_up = ineq & (problem.upper < INFINITY)
         has_low = ineq & (problem.lower > -INFINITY)
         G = np.vstack([problem.A[has_up], -problem.A[has_low]])
         h = np.concatenate([problem.upper[has_up], -problem.lower[has_low]])
-        lb = np.where(problem.lb <= -INFINITY, -np.inf, problem.lb)
-        ub = np.where(problem.ub >= INFINITY, np.inf, problem.ub)
-        qp = qpsolvers.Problem(problem.H, problem.f, G, h, problem.A[eq], problem.upper[eq],
-                               lb, ub)
+        A_eq = np.vstack([problem.A[eq], np.eye(problem.n)[pinned]])
+        b_eq = np.concatenate([problem.upper[eq], lb[pinned]])
+        lb[pinned], ub[pinned] = -np.inf, np.inf
+        qp = qpsolvers.Problem(problem.H, problem.f, G, h, A_eq, b_eq, lb, ub)
         try:
             solution = qpsolvers.solve_problem(qp, solver=self.solver,
                                                **_SETTINGS.get(self.solver, {}))
