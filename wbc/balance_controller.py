@@ -88,6 +88,9 @@ class BalanceController(Protocol):
     def max_normal_force(self, leg: str) -> float:
         """Current normal-force bound of a foot."""
 
+    def normal_force(self, leg: str) -> float:
+        """The normal force the last solved tick gave a foot."""
+
     def set_max_normal_force(self, leg: str, value_n: float) -> None:
         """Normal-force bound of a stance foot (ramp it to unload or reload)."""
 

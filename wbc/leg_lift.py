@@ -178,7 +178,10 @@ class LegLift:
         if phase in (LiftPhase.SHIFTING, LiftPhase.SHIFTING_BACK):
             self._track_com(elapsed)
             if done and phase is LiftPhase.SHIFTING:
-                self._fmax_from = ctrl.max_normal_force(self.leg)
+                # Ramp from the load the foot carries, not from its (much higher) bound:
+                # the bound only bites once it falls below the load.
+                self._load_n = max(ctrl.normal_force(self.leg), ctrl.min_normal_force_n)
+                self._fmax_from = min(self._load_n, ctrl.max_normal_force(self.leg))
                 self._enter(LiftPhase.UNLOADING, now_s, duration=t.unload_s)
             elif done:
                 self._enter(LiftPhase.DONE, now_s, duration=0.0)
@@ -210,8 +213,10 @@ class LegLift:
             if done:
                 self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         elif phase is LiftPhase.RELOADING:
+            # Ramp up to the load the foot carried before the lift; then release the bound.
             s = min_jerk(elapsed / self._duration)[0]
-            ctrl.set_max_normal_force(self.leg, s * ctrl.full_normal_force_n)
+            ctrl.set_max_normal_force(self.leg, ctrl.full_normal_force_n if done
+                                      else s * self._reload_to_n())
             if self.interrupted:  # an unwind shifts back while it reloads
                 self._track_com(now_s - self._shift_t0, duration=t.unwind_shift_s)
             if done and self.interrupted:
@@ -306,7 +311,7 @@ class LegLift:
             self._enter(LiftPhase.SHIFTING_BACK, now_s, duration=t.unwind_shift_s)
         elif self.phase in (LiftPhase.UNLOADING, LiftPhase.RELOADING):
             # Reload from the current bound at the unwind pace, shifting back meanwhile.
-            s0 = ctrl.max_normal_force(self.leg) / ctrl.full_normal_force_n
+            s0 = min(1.0, ctrl.max_normal_force(self.leg) / self._reload_to_n())
             reload_s = self._reload_s()
             self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * reload_s,
                         duration=reload_s)
@@ -315,6 +320,12 @@ class LegLift:
         elif self.phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
             self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         # SHIFTING_BACK already has four loaded feet and ends within shift_back_s.
+
+    def _reload_to_n(self) -> float:
+        """The bound the reload ramps to: the foot's load before the lift, with room to spare."""
+        ctrl = self.controller
+        load = getattr(self, "_load_n", 0.25 * ctrl.total_mass_kg * 9.81)
+        return min(ctrl.full_normal_force_n, 1.5 * load + 2.0 * ctrl.min_normal_force_n)
 
     def _reload_s(self) -> float:
         t = self.timing

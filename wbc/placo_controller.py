@@ -331,6 +331,13 @@ class PlacoController:
         check_name("leg", leg, LEGS)
         return self._max_force[leg]
 
+    def normal_force(self, leg: str) -> float:
+        """The normal force [N] the last solved tick gave a foot (0 before any)."""
+        check_name("leg", leg, LEGS)
+        if getattr(self, "_last", None) is None:
+            return 0.0
+        return float(self._last[2][LEGS.index(leg), 2])
+
     def _check_force(self, leg: str, value_n: float) -> float:
         return as_float(f"{leg} max_normal_force_n", value_n, low=0.0,
                         high=self.config.max_normal_force_n)

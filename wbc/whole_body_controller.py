@@ -289,6 +289,12 @@ class WholeBodyController:
         check_name("leg", leg, LEGS)
         return self._max_force[leg]
 
+    def normal_force(self, leg: str) -> float:
+        """The normal force [N] the last solved tick gave a foot (0 before any)."""
+        check_name("leg", leg, LEGS)
+        value = self.last_solution[_F0 + 3 * _LEG_INDEX[leg] + 2]
+        return float(value) if math.isfinite(value) else 0.0
+
     def support_legs(self) -> list[str]:
         """Stance legs that are fully loaded: the corners of the support polygon."""
         full = self.config.max_normal_force_n
