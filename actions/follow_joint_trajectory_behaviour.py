@@ -64,7 +64,7 @@ from wbc.controller_config import ControllerConfig
 from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.leg_lift import LegLift, LiftPhase
-from wbc.whole_body_controller import LEG_REACH_M
+from wbc.contact_modes import LEG_REACH_M
 
 Result = FollowJointTrajectoryResult
 INVALID_GOAL, INVALID_JOINTS = Result.INVALID_GOAL, Result.INVALID_JOINTS

@@ -14,16 +14,16 @@ import placo
 from wbc.control_output import ControlOutput, ControlStatus
 from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
-from wbc.errors import ConfigurationError, ReachabilityError
+from wbc.errors import ConfigurationError
 from wbc.validation import as_float, as_vector, check_name
-from wbc.whole_body_controller import LEG_REACH_M
+from wbc.contact_modes import ContactModes
 
 _NV, _NJ = 18, 12
 #: Smallest normal-force ratio the force-weight ramp divides by (caps the weight at 1e6x).
 MIN_FORCE_RATIO = 1e-3
 
 
-class PlacoController:
+class PlacoController(ContactModes):
     """Whole-body balance of the GO2 with ``placo.DynamicsSolver`` (one QP per tick).
 
     The tasks and contacts mirror :class:`wbc.WholeBodyController`, with the same
@@ -121,13 +121,6 @@ class PlacoController:
             task.kp, task.kd = kp, 2.0 * math.sqrt(kp)
         self._posture = np.zeros(_NJ)
         self.set_posture_weights(np.ones(_NJ))
-        # The shoulder is fixed to the base: the thigh joint's place in the standing pose.
-        robot.state.q = self.description.pose("standing")
-        robot.update_kinematics()
-        T_base_world = np.linalg.inv(robot.get_T_world_frame("base"))
-        self._shoulder_in_base = {
-            leg: (T_base_world @ robot.get_T_world_frame(f"{leg}_thigh_joint"))[:3, 3]
-            for leg in LEGS}
         self.foot_tasks = {}
         self.contacts = {}
         for leg in LEGS:
@@ -136,14 +129,13 @@ class PlacoController:
             contact.unilateral = True
             contact.mu = cfg.friction_coefficient
             self.foot_tasks[leg], self.contacts[leg] = task, contact
-        self._stance = dict.fromkeys(LEGS, True)
-        self._max_force = dict.fromkeys(LEGS, cfg.max_normal_force_n)
+        self._q: np.ndarray | None = None
+        self._init_contact_modes()
         self._foot_weight = dict.fromkeys(LEGS, cfg.foot_weight)
         for leg in LEGS:
             self._configure_foot(leg)
         self._tau_good = np.zeros(_NJ)
         self._last: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._q: np.ndarray | None = None
         self.ticks = 0
         self.failures = 0
 
@@ -230,27 +222,6 @@ class PlacoController:
         check_name("leg", leg, LEGS)
         return self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3].copy()
 
-    def shoulder_position(self, leg: str) -> np.ndarray:
-        """World position [m] of a leg's shoulder (base-fixed, see the class) at the last state."""
-        check_name("leg", leg, LEGS)
-        T_world_base = self.robot.get_T_world_frame("base")
-        return T_world_base[:3, :3] @ self._shoulder_in_base[leg] + T_world_base[:3, 3]
-
-    @property
-    def min_normal_force_n(self) -> float:
-        """The minimum normal force [N] of a loaded stance foot."""
-        return self.config.min_normal_force_n
-
-    @property
-    def total_mass_kg(self) -> float:
-        """The model's total mass [kg]."""
-        return self.description.total_mass
-
-    @property
-    def full_normal_force_n(self) -> float:
-        """The normal-force bound [N] of a fully loaded stance foot."""
-        return self.config.max_normal_force_n
-
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,
@@ -264,72 +235,11 @@ class PlacoController:
             ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
                 shoulder at the last state; the target is left unchanged.
         """
-        check_name("leg", leg, LEGS)
-        position = as_vector(f"{leg}_foot target", position, 3)
-        if self._q is not None:
-            shoulder = self.shoulder_position(leg)
-            distance = float(np.linalg.norm(position - shoulder))
-            if distance > LEG_REACH_M and clamp_to_reach:
-                position = shoulder + (position - shoulder) * (LEG_REACH_M / distance)
-            elif distance > LEG_REACH_M:
-                raise ReachabilityError(
-                    f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
-                    f"the {leg} shoulder; reachable: at most {LEG_REACH_M:.2f} m"
-                )
+        position = self._reachable_target(leg, position, clamp_to_reach)
         task = self.foot_tasks[leg]
         task.target_world = position
         task.dtarget_world = _vector_or_zero(f"{leg}_foot velocity", velocity)
         task.ddtarget_world = _vector_or_zero(f"{leg}_foot acceleration", acceleration)
-
-    def set_swing(self, leg: str) -> None:
-        """Release a foot: its contact is deactivated and its position task takes over.
-
-        Its target starts at its current position. At least three feet must stay in stance.
-        """
-        check_name("leg", leg, LEGS)
-        if self._stance[leg] and sum(self._stance.values()) <= 3:
-            raise ConfigurationError(
-                f"leg: cannot release {leg}: at least three feet must stay in stance "
-                f"(stance now: {', '.join(self.stance_legs)})"
-            )
-        if self._stance[leg] and self._q is not None:
-            self.set_foot_target(leg, self.foot_position(leg))
-        self._stance[leg] = False
-        self._max_force[leg] = 0.0
-        self._configure_foot(leg)
-
-    def set_stance(self, leg: str, *, max_normal_force_n: float = 0.0) -> None:
-        """Make a foot a stance contact with the given normal-force bound [N] (see the class)."""
-        check_name("leg", leg, LEGS)
-        self._max_force[leg] = self._check_force(leg, max_normal_force_n)
-        self._stance[leg] = True
-        self._configure_foot(leg)
-
-    def set_max_normal_force(self, leg: str, value_n: float) -> None:
-        """Normal-force bound [N] of a stance foot, emulated by its force weight (see the class)."""
-        check_name("leg", leg, LEGS)
-        value = self._check_force(leg, value_n)
-        if not self._stance[leg]:
-            raise ConfigurationError(
-                f"leg: {leg} is in swing; call set_stance({leg!r}) before loading it"
-            )
-        self._max_force[leg] = value
-        self._configure_foot(leg)
-
-    @property
-    def stance_legs(self) -> list[str]:
-        """Legs currently in stance."""
-        return [leg for leg in LEGS if self._stance[leg]]
-
-    def support_legs(self) -> list[str]:
-        """Stance legs that are fully loaded: the corners of the support polygon."""
-        full = self.config.max_normal_force_n
-        return [leg for leg in LEGS if self._stance[leg] and self._max_force[leg] >= full]
-
-    def max_normal_force(self, leg: str) -> float:
-        """Current normal-force bound [N] of a foot."""
-        check_name("leg", leg, LEGS)
-        return self._max_force[leg]
 
     def normal_force(self, leg: str) -> float:
         """The normal force [N] the last solved tick gave a foot (0 before any)."""
@@ -338,9 +248,14 @@ class PlacoController:
             return 0.0
         return float(self._last[2][LEGS.index(leg), 2])
 
-    def _check_force(self, leg: str, value_n: float) -> float:
-        return as_float(f"{leg} max_normal_force_n", value_n, low=0.0,
-                        high=self.config.max_normal_force_n)
+    def _base_placement(self) -> tuple[np.ndarray, np.ndarray] | None:
+        if self._q is None:
+            return None
+        T_world_base = self.robot.get_T_world_frame("base")
+        return T_world_base[:3, :3], T_world_base[:3, 3]
+
+    def _contact_mode_changed(self, leg: str) -> None:
+        self._configure_foot(leg)
 
     def _configure_foot(self, leg: str) -> None:
         """Stance: hard zero-acceleration task with a contact; swing: soft tracking task."""

@@ -14,11 +14,12 @@ from tasks import BaseOrientationTask, ComTask, ContactTask, FramePositionTask, 
 from wbc import qp_kernel
 from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
 from wbc.control_output import ControlOutput, ControlStatus
+from wbc.contact_modes import ContactModes
 from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
-from wbc.errors import ConfigurationError, ReachabilityError
+from wbc.errors import ConfigurationError
 from wbc.support_polygon import SupportPolygon
-from wbc.validation import as_float, as_vector, check_name
+from wbc.validation import as_vector, check_name
 
 _NV, _NJ, _NC = 18, 12, 4
 _F0 = _NV                  # first force variable
@@ -33,11 +34,9 @@ _M = 50
 _LEG_INDEX = {leg: i for i, leg in enumerate(LEGS)}
 _GROUPS = (("dynamics", _DYN), ("stance contacts", _CON), ("torque limits", _TAU),
            ("friction", _FRIC), ("support polygon", _SUP))
-#: Thigh + calf length of a GO2 leg [m], less a margin that keeps the knee bent.
-LEG_REACH_M = 0.40
 
 
-class WholeBodyController:
+class WholeBodyController(ContactModes):
     """Force-level whole-body control of the GO2 by one QP per tick.
 
     Decision variables ``x = [qdd (18), f (4 x 3), s]``: generalized accelerations, world
@@ -90,20 +89,12 @@ class WholeBodyController:
                                                   weight=cfg.foot_weight) for leg in LEGS}
         self.contact_task = ContactTask(self.model, [FOOT_FRAMES[leg] for leg in LEGS],
                                         kd=cfg.contact_damping, radius_m=FOOT_RADIUS_M)
-        standing = self.model.createData()
-        pin.forwardKinematics(self.model, standing, self.description.pose("standing"))
-        self._shoulder_in_base = {
-            leg: standing.oMi[1].actInv(
-                standing.oMi[self.model.getJointId(f"{leg}_thigh_joint")].translation)
-            for leg in LEGS
-        }
         self.support = SupportPolygon(margin_m=cfg.support_margin_m)
 
         self._q_low = self.description.position_lower
         self._q_high = self.description.position_upper
         self._v_max = self.description.velocity_limit
-        self._stance = dict.fromkeys(LEGS, True)
-        self._max_force = dict.fromkeys(LEGS, cfg.max_normal_force_n)
+        self._init_contact_modes()
         self._build_problem()
         self._contacts_changed()
         self._tau_prev = np.zeros(_NJ)
@@ -186,30 +177,6 @@ class WholeBodyController:
         check_name("leg", leg, LEGS)
         return self._foot_pos[_LEG_INDEX[leg]].copy()
 
-    def shoulder_position(self, leg: str) -> np.ndarray:
-        """World position [m] of a leg's shoulder at the last state.
-
-        The shoulder is fixed to the base: where the thigh joint sits in the standing pose
-        (the thigh joint itself swings with the hip's abduction).
-        """
-        check_name("leg", leg, LEGS)
-        return self.data.oMi[1].act(self._shoulder_in_base[leg])
-
-    @property
-    def min_normal_force_n(self) -> float:
-        """The minimum normal force [N] of a loaded stance foot."""
-        return self.config.min_normal_force_n
-
-    @property
-    def total_mass_kg(self) -> float:
-        """The model's total mass [kg]."""
-        return self.description.total_mass
-
-    @property
-    def full_normal_force_n(self) -> float:
-        """The normal-force bound [N] of a fully loaded stance foot."""
-        return self.config.max_normal_force_n
-
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,
@@ -222,83 +189,26 @@ class WholeBodyController:
 
         Raises:
             ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
-                thigh joint at the last state; the target is left unchanged.
+                shoulder at the last state; the target is left unchanged.
         """
-        check_name("leg", leg, LEGS)
-        position = as_vector(f"{leg}_foot target", position, 3)
-        if self._q is not None:
-            shoulder = self.shoulder_position(leg)
-            distance = float(np.linalg.norm(position - shoulder))
-            if distance > LEG_REACH_M and clamp_to_reach:
-                position = shoulder + (position - shoulder) * (LEG_REACH_M / distance)
-            elif distance > LEG_REACH_M:
-                raise ReachabilityError(
-                    f"{leg}_foot target: {position.round(3).tolist()} is {distance:.3f} m from "
-                    f"the {leg} shoulder; reachable: at most {LEG_REACH_M:.2f} m"
-                )
+        position = self._reachable_target(leg, position, clamp_to_reach)
         self.foot_tasks[leg].set_target(position, velocity)
         self.foot_tasks[leg].set_feedforward(np.zeros(3) if acceleration is None else acceleration)
 
-    def set_swing(self, leg: str) -> None:
-        """Release a foot: no contact force, its position task takes over.
-
-        Its target starts at its current position. At least three feet must stay in stance.
-        """
-        check_name("leg", leg, LEGS)
-        if self._stance[leg] and sum(self._stance.values()) <= 3:
-            raise ConfigurationError(
-                f"leg: cannot release {leg}: at least three feet must stay in stance "
-                f"(stance now: {', '.join(self.stance_legs)})"
-            )
-        if self._stance[leg] and self._q is not None:
-            task = self.foot_tasks[leg]
-            task.set_target(self.data.oMf[task.frame_id].translation)
-        self._stance[leg] = False
-        self._max_force[leg] = 0.0
+    def _contact_mode_changed(self, leg: str) -> None:
         self._contacts_changed()
 
-    def set_stance(self, leg: str, *, max_normal_force_n: float = 0.0) -> None:
-        """Make a foot a stance contact with the given maximum normal force [N].
-
-        Start at zero and ramp it up with :meth:`set_max_normal_force` for a smooth touch-down.
-        """
-        check_name("leg", leg, LEGS)
-        self.set_max_normal_force(leg, max_normal_force_n, _allow_swing=True)
-        self._stance[leg] = True
-        self._contacts_changed()
-
-    def set_max_normal_force(self, leg: str, value_n: float, *, _allow_swing: bool = False) -> None:
-        """Upper bound [N] of a stance foot's normal force (ramp it to unload or reload)."""
-        check_name("leg", leg, LEGS)
-        value = as_float(f"{leg} max_normal_force_n", value_n, low=0.0,
-                         high=self.config.max_normal_force_n)
-        if not self._stance[leg] and not _allow_swing:
-            raise ConfigurationError(
-                f"leg: {leg} is in swing; call set_stance({leg!r}) before loading it"
-            )
-        self._max_force[leg] = value
-        self._contacts_changed()
-
-    @property
-    def stance_legs(self) -> list[str]:
-        """Legs currently in stance."""
-        return [leg for leg in LEGS if self._stance[leg]]
-
-    def max_normal_force(self, leg: str) -> float:
-        """Current upper bound [N] of a foot's normal force."""
-        check_name("leg", leg, LEGS)
-        return self._max_force[leg]
+    def _base_placement(self) -> tuple[np.ndarray, np.ndarray] | None:
+        if self._q is None:
+            return None
+        base = self.data.oMi[1]
+        return base.rotation, base.translation
 
     def normal_force(self, leg: str) -> float:
         """The normal force [N] the last solved tick gave a foot (0 before any)."""
         check_name("leg", leg, LEGS)
         value = self.last_solution[_F0 + 3 * _LEG_INDEX[leg] + 2]
         return float(value) if math.isfinite(value) else 0.0
-
-    def support_legs(self) -> list[str]:
-        """Stance legs that are fully loaded: the corners of the support polygon."""
-        full = self.config.max_normal_force_n
-        return [leg for leg in LEGS if self._stance[leg] and self._max_force[leg] >= full]
 
     # ------------------------------------------------------------------ the tick
 
