@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import ctypes.util
 import dataclasses
 import json
 import math
@@ -17,45 +16,34 @@ from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
-# actions/ and wbc/ never import mujoco, so these are safe before MUJOCO_GL is chosen.
+# actions/ and wbc/ never import mujoco, and these sim/ modules import it only when used,
+# so all of them are safe before MUJOCO_GL is chosen.
 from actions.go2_actions import (
     FOLLOW_JOINT_TRAJECTORY_ACTION,
     HIGH_FIVE_ACTION,
     SIT_ACTION,
     STAND_ACTION,
 )
-from actions.high_five_behaviour import MAX_HOLD_S, PHASE_NAMES
-from actions.messages import (
-    Duration,
-    FollowJointTrajectoryGoal,
-    HighFiveGoal,
-    JointTolerance,
-    JointTrajectory,
-    JointTrajectoryPoint,
-    SitGoal,
-    StandGoal,
-)
+from actions.high_five_behaviour import MAX_HOLD_S
+from actions.messages import FollowJointTrajectoryGoal, HighFiveGoal, SitGoal, StandGoal
 from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
-from wbc.description import JOINT_NAMES, LEGS
+from sim.run_recorder import RAISED_LEG, MetricsHook, TickRecorder, write_plot
+from sim.trajectory_file import load_trajectory_goal
+from sim.video_recorder import VideoRecorder, choose_offscreen_gl
+from sim.viewer import Pacer, ViewerHook, window_problem
+from wbc.description import LEGS
 from wbc.errors import ConfigurationError
-from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M, LiftPhase
+from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
     from sim.control_loop import ControlLoop
-    from sim.simulator import Go2Simulator
     from wbc.control_output import ControlOutput
 
 #: Exit codes.
 EXIT_SUCCEEDED, EXIT_NOT_SUCCEEDED, EXIT_USAGE, EXIT_REJECTED, EXIT_UNAVAILABLE = 0, 1, 2, 3, 4
 EXIT_INTERRUPTED = 130
 
-#: The foot a HighFive goal raises.
-RAISED_LEG = "FR"
-#: Feedback phases in which the raised foot follows a target (raising, holding, lowering).
-TRACKING_PHASES = frozenset(
-    PHASE_NAMES[p] for p in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING)
-)
 #: Sim time [s] between refreshes of the progress line on a terminal.
 PROGRESS_REFRESH_S = 0.25
 #: Sim time [s] a goal may run beyond its expected duration before the CLI gives up on it.
@@ -206,87 +194,6 @@ def _trajectory_file(text: str) -> FollowJointTrajectoryGoal:
             f"{text!r} is not a valid trajectory file: {err}") from None
 
 
-# --------------------------------------------------------------------------- trajectory files
-
-_GOAL_KEYS = ("joint_names", "points", "path_tolerance", "goal_tolerance", "goal_time_tolerance")
-_POINT_KEYS = ("positions", "velocities", "accelerations", "effort", "time_from_start")
-_TOLERANCE_KEYS = ("name", "position", "velocity", "acceleration")
-
-
-def _mapping(value: Any, where: str, keys: Sequence[str], required: Sequence[str]
-             ) -> dict[str, Any]:
-    if not isinstance(value, dict):
-        raise ConfigurationError(f"{where}: expected a mapping with keys {', '.join(keys)}, "
-                                 f"received {type(value).__name__}")
-    unknown = sorted(set(value) - set(keys))
-    if unknown:
-        raise ConfigurationError(f"{where}: unknown key {unknown[0]!r}; valid keys: "
-                                 f"{', '.join(keys)}")
-    missing = [k for k in required if k not in value]
-    if missing:
-        raise ConfigurationError(f"{where}: missing key {missing[0]!r}")
-    return value
-
-
-def _list(value: Any, where: str) -> list[Any]:
-    if not isinstance(value, list):
-        raise ConfigurationError(f"{where}: expected a list, received {type(value).__name__}")
-    return value
-
-
-def _seconds(value: Any, where: str) -> Duration:
-    if isinstance(value, dict):
-        return Duration(**_mapping(value, where, ("sec", "nanosec"), ()))
-    return Duration.coerce(value, where)
-
-
-def load_trajectory_goal(path: Path) -> FollowJointTrajectoryGoal:
-    """Build a FollowJointTrajectory goal from a YAML or JSON file (format: ``--help``).
-
-    Raises:
-        OSError: The file cannot be read.
-        ValueError: It is not valid YAML/JSON.
-        ConfigurationError: It does not have the expected keys and types.
-    """
-    text = path.read_text(encoding="utf-8")
-    if path.suffix.lower() == ".json":
-        data = json.loads(text)
-    else:
-        import yaml
-
-        try:
-            data = yaml.safe_load(text)
-        except yaml.MarkedYAMLError as err:
-            mark = err.problem_mark
-            where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "?"
-            raise ValueError(f"YAML error at {where}: {err.problem}") from None
-        except yaml.YAMLError as err:
-            raise ValueError(f"YAML error: {err}") from None
-    data = _mapping(data, "file", _GOAL_KEYS, ("joint_names", "points"))
-    points = []
-    for i, raw in enumerate(_list(data["points"], "points")):
-        where = f"points[{i}]"
-        point = dict(_mapping(raw, where, _POINT_KEYS, ("positions", "time_from_start")))
-        point["time_from_start"] = _seconds(point["time_from_start"],
-                                            f"{where}.time_from_start")
-        try:
-            points.append(JointTrajectoryPoint(**point))
-        except ConfigurationError as err:
-            raise ConfigurationError(f"{where}: {err}") from None
-    tolerances = {}
-    for key in ("path_tolerance", "goal_tolerance"):
-        tolerances[key] = [
-            JointTolerance(**_mapping(t, f"{key}[{i}]", _TOLERANCE_KEYS, ("name",)))
-            for i, t in enumerate(_list(data.get(key, []), key))
-        ]
-    return FollowJointTrajectoryGoal(
-        trajectory=JointTrajectory(joint_names=data["joint_names"], points=points),
-        goal_time_tolerance=_seconds(data.get("goal_time_tolerance", 0.0),
-                                     "goal_time_tolerance"),
-        **tolerances,
-    )
-
-
 # --------------------------------------------------------------------------- the parser
 
 
@@ -380,7 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"foot height above the ground [m], in [{MIN_HEIGHT_M:.2f}, {MAX_HEIGHT_M:.2f}] "
              "(default: 0.40)")
     high_five.add_argument(
-        "--hold", type=_whole_in(0, MAX_HOLD_S, what="a whole number of seconds"), default=2, metavar="S",
+        "--hold", type=_whole_in(0, MAX_HOLD_S, what="a whole number of seconds"), default=2,
+        metavar="S",
         help=f"seconds to hold the foot up [s], a whole number in [0, {MAX_HOLD_S}] "
              "(default: 2)")
     high_five.set_defaults(run=_high_five)
@@ -479,43 +387,7 @@ def _stand_pd(args: argparse.Namespace) -> int:
     return EXIT_SUCCEEDED
 
 
-# --------------------------------------------------------------------------- display helpers
-
-
-def has_display() -> bool:
-    """Whether a window can be opened ($DISPLAY or $WAYLAND_DISPLAY is set)."""
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
-def window_problem() -> str:
-    """Why the viewer's window cannot open ('' when it can)."""
-    if not has_display():
-        return "no display ($DISPLAY and $WAYLAND_DISPLAY are unset)"
-    import warnings
-
-    import glfw  # the viewer's windowing library, a dependency of mujoco
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # glfw warns, then returns False
-        if not glfw.init():
-            display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-            return f"cannot connect to the display {display!r}"
-    glfw.terminate()
-    return ""
-
-
-def choose_offscreen_gl() -> None:
-    """Pick a MuJoCo GL backend that renders without a display, before mujoco is imported.
-
-    Respects a ``MUJOCO_GL`` the user set. OSMesa (``libosmesa6``, installed by
-    ``scripts/setup.sh``) is preferred; EGL is used when only it is present.
-    """
-    if os.environ.get("MUJOCO_GL") or has_display():
-        return
-    if ctypes.util.find_library("OSMesa") or not ctypes.util.find_library("EGL"):
-        os.environ["MUJOCO_GL"] = "osmesa"
-    else:
-        os.environ["MUJOCO_GL"] = "egl"
+# --------------------------------------------------------------------------- printing
 
 
 def _feedback_view(feedback: Any, trajectory_end_s: float | None
@@ -565,162 +437,6 @@ class FeedbackPrinter:
             self._progress_line = False
         self.stream.write(text + "\n")
         self.stream.flush()
-
-
-# --------------------------------------------------------------------------- per-tick hooks
-
-
-class TickRecorder:
-    """Per-tick arrays for ``--log`` and ``--plot``: what the controller saw and did, and
-    what MuJoCo measured during the tick."""
-
-    def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG):
-        self.phase_of = phase_of
-        self.leg = leg
-        self.rows: dict[str, list[Any]] = {k: [] for k in (
-            "t_s", "q", "v", "tau", "foot_target", "foot_position", "phase",
-            "contact_forces", "com_margin_m", "qp_ok", "tick_us")}
-
-    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
-        from sim.episode_metrics import LOADED_FORCE_N
-        from wbc.support_polygon import SupportPolygon
-
-        sim = loop.sim
-        phase = self.phase_of()
-        # MuJoCo's contacts and positions in data are those of the tick's state (mj_step
-        # computes them before integrating), so they line up with q and v below.
-        forces = sim.foot_contact_forces()
-        feet = sim.foot_positions()
-        loaded = [feet[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_FORCE_N]
-        margin = (SupportPolygon.signed_distance(np.array(loaded), sim.data.subtree_com[1])
-                  if len(loaded) >= 3 else math.nan)
-        tracking = phase in TRACKING_PHASES
-        target = loop.controller.foot_tasks[self.leg].target if tracking else None
-        row = self.rows
-        row["t_s"].append(loop.context.now_s)
-        row["q"].append(np.array(loop.context.q))
-        row["v"].append(np.array(loop.context.v))
-        row["tau"].append(np.array(out.tau))
-        row["foot_target"].append(np.full(3, np.nan) if target is None else np.array(target))
-        row["foot_position"].append(feet[self.leg])
-        row["phase"].append(phase)
-        row["contact_forces"].append(np.array([forces[leg] for leg in LEGS]))
-        row["com_margin_m"].append(margin)
-        row["qp_ok"].append(out.ok)
-        row["tick_us"].append(out.timings.get("total", math.nan) * 1e6)
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The recorded rows as arrays (N = ticks), plus the names that label them."""
-        arrays = {k: np.array(v) for k, v in self.rows.items()}
-        arrays["phase"] = np.array(self.rows["phase"], dtype=str)
-        arrays["joint_names"] = np.array(JOINT_NAMES)
-        arrays["legs"] = np.array(LEGS)
-        arrays["raised_leg"] = np.array(self.leg)
-        return arrays
-
-
-class MetricsHook:
-    """Feeds :class:`sim.episode_metrics.EpisodeMetrics` every tick."""
-
-    def __init__(self, loop: ControlLoop, phase_of: Callable[[], str], leg: str = RAISED_LEG):
-        from sim.episode_metrics import EpisodeMetrics
-
-        self.metrics = EpisodeMetrics(loop.sim, loop.controller.description.effort_limit)
-        self.phase_of = phase_of
-        self.leg = leg
-
-    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
-        phase = self.phase_of()
-        error = None
-        if phase in TRACKING_PHASES:
-            target = loop.controller.foot_tasks[self.leg].target
-            error = float(np.linalg.norm(loop.sim.foot_positions()[self.leg] - target))
-        self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
-                            holding=phase == PHASE_NAMES[LiftPhase.HOLDING])
-
-
-class VideoRecorder:
-    """Renders a camera tracking the base at ``fps`` frames per simulated second to an MP4."""
-
-    def __init__(self, sim: Go2Simulator, path: Path, *, fps: int, size: tuple[int, int]):
-        import imageio
-        import mujoco
-
-        width, height = size
-        vis = sim.model.vis
-        saved = (vis.global_.offwidth, vis.global_.offheight, vis.quality.offsamples,
-                 vis.quality.shadowsize)
-        vis.global_.offwidth = max(vis.global_.offwidth, width)
-        vis.global_.offheight = max(vis.global_.offheight, height)
-        if not has_display():
-            # Software GL: a 4096 px shadow map and 4x multisampling cost ~0.4 s a frame;
-            # 1024 px and none keep it near 0.1 s.
-            vis.quality.offsamples = 0
-            vis.quality.shadowsize = min(vis.quality.shadowsize, 1024)
-        try:
-            self.renderer = mujoco.Renderer(sim.model, height=height, width=width)
-        finally:
-            (vis.global_.offwidth, vis.global_.offheight, vis.quality.offsamples,
-             vis.quality.shadowsize) = saved
-        self.camera = mujoco.MjvCamera()
-        self.camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        self.camera.trackbodyid = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "base")
-        # From behind on the right, looking down enough to keep the (black) sky out of view.
-        self.camera.distance, self.camera.azimuth, self.camera.elevation = 1.5, 60.0, -25.0
-        self.sim = sim
-        self.period_s = 1.0 / fps
-        self.next_s = sim.time_s
-        self.frames = 0
-        self.writer = imageio.get_writer(path, fps=fps, codec="libx264", quality=7,
-                                         macro_block_size=2)
-
-    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
-        if self.sim.time_s + 1e-9 < self.next_s:
-            return
-        self.next_s += self.period_s
-        self.renderer.update_scene(self.sim.data, self.camera)
-        self.writer.append_data(self.renderer.render())
-        self.frames += 1
-
-    def close(self) -> None:
-        """Finish the file and free the GL context."""
-        self.writer.close()
-        self.renderer.close()
-
-
-class ViewerHook:
-    """Keeps a passive MuJoCo viewer in sync, about 60 times a simulated second."""
-
-    def __init__(self, sim: Go2Simulator):
-        import mujoco.viewer
-
-        self.handle = mujoco.viewer.launch_passive(sim.model, sim.data, show_left_ui=False,
-                                                   show_right_ui=False)
-        self.sim = sim
-        self.next_s = 0.0
-
-    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
-        if self.sim.time_s >= self.next_s and self.handle.is_running():
-            self.handle.sync()
-            self.next_s = self.sim.time_s + 1.0 / 60.0
-
-    def close(self) -> None:
-        """Close the window."""
-        self.handle.close()
-
-
-class Pacer:
-    """Sleeps so that simulated time does not run ahead of the wall clock (``--realtime``)."""
-
-    def __init__(self, sim: Go2Simulator):
-        self.sim = sim
-        self.start_wall = time.perf_counter()
-        self.start_sim = sim.time_s
-
-    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
-        ahead = (self.sim.time_s - self.start_sim) - (time.perf_counter() - self.start_wall)
-        if ahead > 2e-3:  # below the sleep granularity, catch up on a later tick
-            time.sleep(ahead)
 
 
 class _Timed:
@@ -1033,59 +749,6 @@ def _metrics_text(summary: Any, *, raised: bool) -> str:
               f"tick median {s.tick_median_us:.0f} us (p99 {s.tick_p99_us:.0f} us)",
               f"real-time factor {s.real_time_factor:.2f}"]
     return "metrics: " + "; ".join(parts)
-
-
-# --------------------------------------------------------------------------- the plot
-
-
-def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None:
-    """Raised-foot height vs target, CoM margin, FR normal force and tick time vs sim time."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Patch
-
-    t = arrays["t_s"]
-    leg = str(arrays["raised_leg"])
-    fr = list(arrays["legs"]).index("FR")
-    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5), layout="constrained")
-    ax = axes[0]
-    ax.plot(t, arrays["foot_position"][:, 2], label=f"{leg} foot (MuJoCo)")
-    ax.plot(t, arrays["foot_target"][:, 2], "--", label="target")
-    ax.set_ylabel("foot height [m]")
-    ax.legend(loc="upper right", fontsize=8)
-    ax = axes[1]
-    ax.plot(t, arrays["com_margin_m"] * 1e3)
-    ax.axhline(0.0, color="tab:red", lw=0.8, ls=":", label="support edge")
-    ax.set_ylabel("CoM margin [mm]")
-    ax.legend(loc="upper right", fontsize=8)
-    ax = axes[2]
-    ax.plot(t, arrays["contact_forces"][:, fr, 2])
-    ax.set_ylabel("FR normal force [N]")
-    ax = axes[3]
-    ax.plot(t, arrays["tick_us"], lw=0.5)
-    ax.axhline(1e3, color="tab:red", lw=0.8, ls=":", label="1 kHz period")
-    ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others
-    ax.set_ylabel("control tick [us]")
-    ax.legend(loc="upper right", fontsize=8)
-    ax.set_xlabel("sim time [s]")
-    # Shade the phases.
-    phases = arrays["phase"]
-    starts = [0] + [i for i in range(1, len(phases)) if phases[i] != phases[i - 1]]
-    colours: dict[str, Any] = {}
-    palette = plt.get_cmap("Pastel1").colors + plt.get_cmap("Pastel2").colors
-    for k, start in enumerate(starts):
-        end = starts[k + 1] if k + 1 < len(starts) else len(t) - 1
-        name = str(phases[start]) or "(waiting)"
-        colour = colours.setdefault(name, palette[len(colours) % len(palette)])
-        for ax in axes:
-            ax.axvspan(t[start], t[end], color=colour, alpha=0.6, lw=0, zorder=0)
-    fig.legend(handles=[Patch(color=c, label=n) for n, c in colours.items()],
-               loc="outside lower center", ncols=min(len(colours), 6), fontsize=8)
-    fig.suptitle(title)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 # --------------------------------------------------------------------------- entry point

@@ -25,9 +25,9 @@ from sim.cli import (
     SETTLE_S,
     TRAJECTORY_FORMAT_HELP,
     build_parser,
-    load_trajectory_goal,
     main,
 )
+from sim.trajectory_file import load_trajectory_goal
 from wbc.description import JOINT_NAMES, LEGS
 
 HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading",

@@ -1,0 +1,144 @@
+"""What a run did, tick by tick: per-tick arrays, episode metrics, and a plot of them."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from actions.high_five_behaviour import PHASE_NAMES
+from wbc.description import JOINT_NAMES, LEGS
+from wbc.leg_lift import LiftPhase
+
+if TYPE_CHECKING:
+    from sim.control_loop import ControlLoop
+    from wbc.control_output import ControlOutput
+
+#: The foot a HighFive goal raises.
+RAISED_LEG = "FR"
+#: Feedback phases in which the raised foot follows a target (raising, holding, lowering).
+TRACKING_PHASES = frozenset(
+    PHASE_NAMES[p] for p in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING)
+)
+
+
+class TickRecorder:
+    """Per-tick arrays for ``--log`` and ``--plot``: what the controller saw and did, and
+    what MuJoCo measured during the tick."""
+
+    def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG):
+        self.phase_of = phase_of
+        self.leg = leg
+        self.rows: dict[str, list[Any]] = {k: [] for k in (
+            "t_s", "q", "v", "tau", "foot_target", "foot_position", "phase",
+            "contact_forces", "com_margin_m", "qp_ok", "tick_us")}
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        from sim.episode_metrics import LOADED_FORCE_N
+        from wbc.support_polygon import SupportPolygon
+
+        sim = loop.sim
+        phase = self.phase_of()
+        # MuJoCo's contacts and positions in data are those of the tick's state (mj_step
+        # computes them before integrating), so they line up with q and v below.
+        forces = sim.foot_contact_forces()
+        feet = sim.foot_positions()
+        loaded = [feet[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_FORCE_N]
+        margin = (SupportPolygon.signed_distance(np.array(loaded), sim.data.subtree_com[1])
+                  if len(loaded) >= 3 else math.nan)
+        tracking = phase in TRACKING_PHASES
+        target = loop.controller.foot_tasks[self.leg].target if tracking else None
+        row = self.rows
+        row["t_s"].append(loop.context.now_s)
+        row["q"].append(np.array(loop.context.q))
+        row["v"].append(np.array(loop.context.v))
+        row["tau"].append(np.array(out.tau))
+        row["foot_target"].append(np.full(3, np.nan) if target is None else np.array(target))
+        row["foot_position"].append(feet[self.leg])
+        row["phase"].append(phase)
+        row["contact_forces"].append(np.array([forces[leg] for leg in LEGS]))
+        row["com_margin_m"].append(margin)
+        row["qp_ok"].append(out.ok)
+        row["tick_us"].append(out.timings.get("total", math.nan) * 1e6)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The recorded rows as arrays (N = ticks), plus the names that label them."""
+        arrays = {k: np.array(v) for k, v in self.rows.items()}
+        arrays["phase"] = np.array(self.rows["phase"], dtype=str)
+        arrays["joint_names"] = np.array(JOINT_NAMES)
+        arrays["legs"] = np.array(LEGS)
+        arrays["raised_leg"] = np.array(self.leg)
+        return arrays
+
+
+class MetricsHook:
+    """Feeds :class:`sim.episode_metrics.EpisodeMetrics` every tick."""
+
+    def __init__(self, loop: ControlLoop, phase_of: Callable[[], str], leg: str = RAISED_LEG):
+        from sim.episode_metrics import EpisodeMetrics
+
+        self.metrics = EpisodeMetrics(loop.sim, loop.controller.description.effort_limit)
+        self.phase_of = phase_of
+        self.leg = leg
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        phase = self.phase_of()
+        error = None
+        if phase in TRACKING_PHASES:
+            target = loop.controller.foot_tasks[self.leg].target
+            error = float(np.linalg.norm(loop.sim.foot_positions()[self.leg] - target))
+        self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
+                            holding=phase == PHASE_NAMES[LiftPhase.HOLDING])
+
+
+def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None:
+    """Raised-foot height vs target, CoM margin, FR normal force and tick time vs sim time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    t = arrays["t_s"]
+    leg = str(arrays["raised_leg"])
+    fr = list(arrays["legs"]).index("FR")
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5), layout="constrained")
+    ax = axes[0]
+    ax.plot(t, arrays["foot_position"][:, 2], label=f"{leg} foot (MuJoCo)")
+    ax.plot(t, arrays["foot_target"][:, 2], "--", label="target")
+    ax.set_ylabel("foot height [m]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[1]
+    ax.plot(t, arrays["com_margin_m"] * 1e3)
+    ax.axhline(0.0, color="tab:red", lw=0.8, ls=":", label="support edge")
+    ax.set_ylabel("CoM margin [mm]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[2]
+    ax.plot(t, arrays["contact_forces"][:, fr, 2])
+    ax.set_ylabel("FR normal force [N]")
+    ax = axes[3]
+    ax.plot(t, arrays["tick_us"], lw=0.5)
+    ax.axhline(1e3, color="tab:red", lw=0.8, ls=":", label="1 kHz period")
+    ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others
+    ax.set_ylabel("control tick [us]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel("sim time [s]")
+    # Shade the phases.
+    phases = arrays["phase"]
+    starts = [0] + [i for i in range(1, len(phases)) if phases[i] != phases[i - 1]]
+    colours: dict[str, Any] = {}
+    palette = plt.get_cmap("Pastel1").colors + plt.get_cmap("Pastel2").colors
+    for k, start in enumerate(starts):
+        end = starts[k + 1] if k + 1 < len(starts) else len(t) - 1
+        name = str(phases[start]) or "(waiting)"
+        colour = colours.setdefault(name, palette[len(colours) % len(palette)])
+        for ax in axes:
+            ax.axvspan(t[start], t[end], color=colour, alpha=0.6, lw=0, zorder=0)
+    fig.legend(handles=[Patch(color=c, label=n) for n, c in colours.items()],
+               loc="outside lower center", ncols=min(len(colours), 6), fontsize=8)
+    fig.suptitle(title)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
