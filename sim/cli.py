@@ -38,6 +38,7 @@ from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
     from sim.control_loop import ControlLoop
+    from sim.disturbances import PushSchedule
     from wbc.control_output import ControlOutput
 
 #: Exit codes.
@@ -136,15 +137,9 @@ def _whole_in(low: int, high: int, *, what: str) -> Callable[[str], int]:
     return parse
 
 
-@dataclass(frozen=True)
-class Push:
-    """A horizontal push on the base: ``force_n`` [N] for ``duration_s`` [s]."""
-
-    force_n: float
-    duration_s: float
-
-
-def _push(text: str) -> Push:
+def _push(text: str) -> tuple[float, float]:
+    """``FORCE_N,DURATION_S`` as ``(force [N], duration [s])``; the push is built with its time
+    and direction, once all the options are known."""
     expected = "FORCE_N,DURATION_S with a force in [0, 500] N and a duration in (0, 5] s"
     parts = text.split(",")
     try:
@@ -154,7 +149,7 @@ def _push(text: str) -> Push:
             f"expected {expected} (e.g. 40,0.1), received {text!r}") from None
     if not (0.0 <= force <= 500.0 and 0.0 < duration <= 5.0):
         raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}")
-    return Push(force, duration)
+    return force, duration
 
 
 def _video_size(text: str) -> tuple[int, int]:
@@ -503,6 +498,7 @@ class GoalRun:
         self.summary: Any = None
         self.recorder: TickRecorder | None = None
         self.video: VideoRecorder | None = None
+        self.pushes: PushSchedule | None = None
         self.wall_start = time.perf_counter()
         self.wall_s = 0.0
 
@@ -520,8 +516,14 @@ class GoalRun:
         if problem:
             print(f"go2-wbc: --viewer: {problem}; running headless", file=sys.stderr)
         from sim.control_loop import ControlLoop
+        from sim.disturbances import Push, PushSchedule
 
         loop = ControlLoop.simulated(pose=args.start_pose or "standing")
+        if args.push is not None:
+            force_n, duration_s = args.push
+            self.pushes = PushSchedule(loop.sim, [Push(
+                at_s=args.push_at, force_n=force_n, duration_s=duration_s,
+                direction_deg=args.push_dir, relative_to_heading=True)])
         loop.spin_for(SETTLE_S)
         if self.action_name not in loop.runner.server_names:
             print(f"go2-wbc: the '{self.action_name}' action is not served by this version "
@@ -630,18 +632,14 @@ class GoalRun:
         if args.cancel_at is not None and now >= args.cancel_at - 1e-9 and not self._done(
                 "cancel_requested"):
             self._cancel(handle, "cancel_requested", f"--cancel-at {args.cancel_at:g}")
-        if args.push is not None and now >= args.push_at - 1e-9 and not self._done("push"):
-            q = loop.context.q
-            x, y, z, w = q[3:7]
-            heading = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-            angle = heading + math.radians(args.push_dir)
-            force = [args.push.force_n * math.cos(angle), args.push.force_n * math.sin(angle),
-                     0.0]
-            loop.sim.apply_force(force, args.push.duration_s, body="base")
-            self._event("push", now, force_n=[round(f, 3) for f in force],
-                        duration_s=args.push.duration_s, direction_deg=args.push_dir)
-            self.say(f"[{now:7.3f} s] push: {args.push.force_n:g} N at {args.push_dir:g} deg "
-                     f"for {args.push.duration_s:g} s")
+        if self.pushes is not None:
+            applied = len(self.pushes.applied)
+            self.pushes(loop, loop.last_output)  # applies the push once it is due
+            for t_s, push, force in self.pushes.applied[applied:]:
+                self._event("push", t_s, force_n=[round(float(f), 3) for f in force],
+                            duration_s=push.duration_s, direction_deg=push.direction_deg)
+                self.say(f"[{t_s:7.3f} s] push: {push.force_n:g} N at {push.direction_deg:g} "
+                         f"deg for {push.duration_s:g} s")
         if now > self.deadline_s and not self._done("timeout"):
             self._cancel(handle, "timeout", f"no result after {now:.1f} s of sim time")
 

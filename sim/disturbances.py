@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 
 from actions.robot_interface import RobotInterface
-from wbc.validation import as_float, as_vector
+from wbc.validation import as_float
 
 
 @dataclass(frozen=True)
@@ -139,6 +139,8 @@ class Push:
         direction_deg: Direction in the horizontal plane (0 forward, 90 left, 270 right).
         body: The body pushed (``base``, or ``FR_foot`` for a hand on the raised foot).
         vertical_n: A vertical component [N] (positive up).
+        relative_to_heading: Whether ``direction_deg`` is relative to the base's heading
+            (yaw) when the push starts, rather than to the world's x axis.
     """
 
     at_s: float
@@ -147,15 +149,18 @@ class Push:
     direction_deg: float = 0.0
     body: str = "base"
     vertical_n: float = 0.0
+    relative_to_heading: bool = False
 
     @property
     def impulse_ns(self) -> float:
         """Horizontal impulse [N s]."""
         return self.force_n * self.duration_s
 
-    def vector(self) -> np.ndarray:
-        """World force [N]."""
+    def vector(self, heading_rad: float = 0.0) -> np.ndarray:
+        """World force [N], for a base heading ``heading_rad`` [rad] when relative to it."""
         angle = math.radians(self.direction_deg)
+        if self.relative_to_heading:
+            angle = heading_rad + angle
         return np.array([self.force_n * math.cos(angle), self.force_n * math.sin(angle),
                          self.vertical_n])
 
@@ -170,11 +175,18 @@ class PushSchedule:
     def __init__(self, sim, pushes: list[Push]):
         self.sim = sim
         self.pending = sorted(pushes, key=lambda p: p.at_s)
-        self.applied: list[tuple[float, Push]] = []
+        #: ``(time [s], push, world force [N])`` of each push applied.
+        self.applied: list[tuple[float, Push, np.ndarray]] = []
 
     def __call__(self, loop, out) -> None:
         now = self.sim.time_s
         while self.pending and self.pending[0].at_s <= now + 1e-9:
             push = self.pending.pop(0)
-            self.sim.apply_force(push.vector(), push.duration_s, body=push.body)
-            self.applied.append((now, push))
+            force = push.vector(self._heading_rad())
+            self.sim.apply_force(force, push.duration_s, body=push.body)
+            self.applied.append((now, push, force))
+
+    def _heading_rad(self) -> float:
+        """The base's yaw [rad] now."""
+        x, y, z, w = self.sim.state()[0][3:7]  # Pinocchio's (x, y, z, w)
+        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
