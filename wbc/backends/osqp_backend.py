@@ -71,7 +71,7 @@ class OsqpBackend(QpBackend):
             self._solver.update(q=problem.f, l=self._l, u=self._u,
                                 Px=problem.H[self._p_rows, self._p_cols],
                                 Ax=self._stacked.T.reshape(-1))
-        result = self._solver.solve()
+        result = self._solver.solve(raise_error=False)  # failures are reported, not raised
         elapsed = time.perf_counter() - start
         status = str(result.info.status)
         x = result.x if result.x is not None else np.full(problem.n, np.nan)
