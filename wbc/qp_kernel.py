@@ -48,6 +48,24 @@ def log3(R: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def add_least_squares(H, f, J, residual, weight):
+    """``H += w J^T J`` and ``f += w J^T residual`` on the leading block, in place."""
+    rows, cols = J.shape
+    for i in range(cols):
+        s = 0.0
+        for r in range(rows):
+            s += J[r, i] * residual[r]
+        f[i] += weight * s
+        for j in range(i, cols):
+            s = 0.0
+            for r in range(rows):
+                s += J[r, i] * J[r, j]
+            H[i, j] += weight * s
+            if j != i:
+                H[j, i] += weight * s
+
+
+@numba.njit(cache=True)
 def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
              foot_pos, foot_acc, stance, radius, contact_kd,
              com_ref, com_gains, R_target, base_ref, base_gains,
@@ -56,7 +74,7 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
              normals, offsets, n_edges, omega,
              tau_max, q_low, q_high, v_max, horizon,
              h_const, rate_weights, x_prev, tau_prev, torque_rate_weight,
-             H, f, A, lower, upper, lb, ub, jc, errors):
+             H, f, A, lower, upper, lb, ub, jc, errors, work_ms, work_foot_jac):
     """Fill the QP (``H, f, A, lower, upper`` and the joint rows of ``lb, ub``) for one tick.
 
     Args:
@@ -79,16 +97,19 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         H, f, A, lower, upper, lb, ub: the QP, written in place.
         jc (12, 18): written with the contact Jacobians (for torque recovery).
         errors (7,): written with error norms: com, base, posture, then the four feet.
+        work_ms (18, 18), work_foot_jac (4, 6, 18): scratch space, allocated once by the
+            caller (no allocation in the tick).
     """
     # Symmetric mass matrix from its upper triangle.
-    Ms = np.empty((NV, NV))
+    Ms = work_ms
     for i in range(NV):
         for j in range(i, NV):
             Ms[i, j] = M[i, j]
             Ms[j, i] = M[i, j]
 
     # Foot Jacobians (world-aligned, at the frame origin) from the joint Jacobians.
-    foot_jac = np.zeros((NC, 6, NV))
+    foot_jac = work_foot_jac
+    foot_jac[:, :, :] = 0.0
     for i in range(NC):
         p = foot_pos[i]
         for c in LEG_COLUMNS[i]:
@@ -101,7 +122,6 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
             foot_jac[i, 5, c] = wz
 
     # Rolling contact points: J = J_lin - [d]x J_ang, d = (0, 0, -r).
-    contact_rhs = np.empty(3 * NC)
     for i in range(NC):
         for k in range(NV):
             jc[3 * i, k] = foot_jac[i, 0, k] - radius * foot_jac[i, 4, k]
@@ -110,10 +130,18 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         drift0 = foot_acc[i, 0] - radius * foot_acc[i, 4]
         drift1 = foot_acc[i, 1] + radius * foot_acc[i, 3]
         drift2 = foot_acc[i, 2]
-        vel = jc[3 * i:3 * i + 3] @ v
-        contact_rhs[3 * i] = -contact_kd * vel[0] - drift0
-        contact_rhs[3 * i + 1] = -contact_kd * vel[1] - drift1
-        contact_rhs[3 * i + 2] = -contact_kd * vel[2] - drift2
+        for a, drift in ((0, drift0), (1, drift1), (2, drift2)):
+            row = 3 * i + a
+            vel = 0.0
+            for k in range(NV):
+                vel += jc[row, k] * v[k]
+            rhs = -contact_kd * vel - drift
+            if stance[i]:
+                lower[CON + row] = rhs
+                upper[CON + row] = rhs
+            else:
+                lower[CON + row] = -INF
+                upper[CON + row] = INF
 
     # Equations of motion (floating base), stance contacts, torque limits.
     A[DYN:DYN + 6, :NV] = Ms[:6]
@@ -127,15 +155,6 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         lower[DYN + k] = -h[k]
         upper[DYN + k] = -h[k]
     A[CON:CON + 3 * NC, :NV] = jc
-    for i in range(NC):
-        for a in range(3):
-            row = CON + 3 * i + a
-            if stance[i]:
-                lower[row] = contact_rhs[3 * i + a]
-                upper[row] = contact_rhs[3 * i + a]
-            else:
-                lower[row] = -INF
-                upper[row] = INF
     for k in range(NJ):
         lower[TAU + k] = -tau_max[k] - h[6 + k]
         upper[TAU + k] = tau_max[k] - h[6 + k]
@@ -171,11 +190,14 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
     f[:] = 0.0
     # Centre of mass: weight * |Jcom qdd + acom - a_des|^2.
     kp, kd, w = com_gains[0], com_gains[1], com_gains[2]
-    err = com_ref[0] - com
-    des = kp * err + kd * (com_ref[1] - vcom) + com_ref[2]
-    H[:NV, :NV] += w * (Jcom.T @ Jcom)
-    f[:NV] += w * (Jcom.T @ (acom - des))
-    errors[0] = np.sqrt(np.sum(err * err))
+    residual = np.empty(3)
+    total = 0.0
+    for a in range(3):
+        e = com_ref[0, a] - com[a]
+        residual[a] = acom[a] - (kp * e + kd * (com_ref[1, a] - vcom[a]) + com_ref[2, a])
+        total += e * e
+    add_least_squares(H, f, Jcom, residual, w)
+    errors[0] = np.sqrt(total)
     # Base orientation: the Jacobian selects v[3:6], the drift is zero.
     kp, kd, w = base_gains[0], base_gains[1], base_gains[2]
     err = log3(R.T @ R_target)
@@ -200,15 +222,22 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
             continue
         kp, kd, w = foot_gains[i, 0], foot_gains[i, 1], foot_gains[i, 2]
         Jf = foot_jac[i, :3]
-        err = foot_ref[i, 0] - foot_pos[i]
-        des = kp * err + kd * (foot_ref[i, 1] - Jf @ v) + foot_ref[i, 2]
-        H[:NV, :NV] += w * (Jf.T @ Jf)
-        f[:NV] += w * (Jf.T @ (foot_acc[i, :3] - des))
-        errors[3 + i] = np.sqrt(np.sum(err * err))
+        total = 0.0
+        for a in range(3):
+            e = foot_ref[i, 0, a] - foot_pos[i, a]
+            vel = 0.0
+            for k in range(NV):
+                vel += Jf[a, k] * v[k]
+            residual[a] = foot_acc[i, a] - (kp * e + kd * (foot_ref[i, 1, a] - vel)
+                                            + foot_ref[i, 2, a])
+            total += e * e
+        add_least_squares(H, f, Jf, residual, w)
+        errors[3 + i] = np.sqrt(total)
     # Smoothness: a pull towards the previous tick's solution, and on the torque change.
     for k in range(S):
         f[k] -= rate_weights[k] * x_prev[k]
     if torque_rate_weight > 0.0:
-        Sm = A[TAU:TAU + NJ, :S]
-        H[:S, :S] += torque_rate_weight * (Sm.T @ Sm)
-        f[:S] += torque_rate_weight * (Sm.T @ (h[6:] - tau_prev))
+        offset = np.empty(NJ)
+        for k in range(NJ):
+            offset[k] = h[6 + k] - tau_prev[k]
+        add_least_squares(H, f, A[TAU:TAU + NJ, :S], offset, torque_rate_weight)

@@ -322,6 +322,8 @@ class WholeBodyController(ContactModes):
         self._n_edges = 0
         self._jc = np.zeros((3 * _NC, _NV))
         self._errors = np.zeros(3 + _NC)
+        self._work_ms = np.zeros((_NV, _NV))
+        self._work_foot_jac = np.zeros((_NC, 6, _NV))
         self._support_key: tuple[str, ...] | None = None
         self._swing_legs: list[str] = []
 
@@ -341,11 +343,13 @@ class WholeBodyController(ContactModes):
                 p.is_equality[rows] = False
                 p.lb[fz - 2:fz + 1] = p.ub[fz - 2:fz + 1] = 0.0
         self._swing_legs = [leg for leg in LEGS if not self._stance[leg]]
+        self._support = tuple(self.support_legs())
         self._support_key = None
+        p.structure_version += 1
 
     def _assemble(self, q: np.ndarray, v: np.ndarray) -> None:
         data, p, cfg = self.data, self.problem, self.config
-        legs = tuple(self.support_legs())
+        legs = self._support
         if legs != self._support_key:  # the polygon changes with the contacts only
             self._support_key = legs
             self._n_edges = 0
@@ -369,7 +373,8 @@ class WholeBodyController(ContactModes):
             self._normals, self._offsets, self._n_edges, cfg.support_omega,
             self.tau_max, self._q_low, self._q_high, self._v_max, cfg.joint_limit_horizon_s,
             self._h_const, self._rate_weights, self._x_prev, self._tau_prev,
-            cfg.torque_rate_weight, p.H, p.f, p.A, p.lower, p.upper, p.lb, p.ub, self._jc, self._errors)
+            cfg.torque_rate_weight, p.H, p.f, p.A, p.lower, p.upper, p.lb, p.ub, self._jc,
+            self._errors, self._work_ms, self._work_foot_jac)
 
     # ------------------------------------------------------------------ failures
 

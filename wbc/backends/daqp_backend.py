@@ -42,17 +42,15 @@ class DaqpBackend(QpBackend):
         """
         self.settings = {"primal_tol": primal_tol, "iter_limit": iter_limit}
         self._sense = np.zeros(0, dtype=np.int32)
-        self._equality = np.zeros(0, dtype=bool)
+        self._structure: tuple[int, int, int] | None = None
 
     def setup(self, problem: QpProblem) -> None:
         self._sense = np.zeros(problem.n + problem.m, dtype=np.int32)
-        self._equality = np.zeros(problem.m, dtype=bool)
         self._sense[problem.n:][problem.is_equality] = _EQUALITY
-        self._equality[:] = problem.is_equality
+        self._structure = (problem.n, problem.m, problem.structure_version)
 
     def solve(self, problem: QpProblem) -> QpResult:
-        if self._sense.shape[0] != problem.n + problem.m or not np.array_equal(
-                self._equality, problem.is_equality):
+        if self._structure != (problem.n, problem.m, problem.structure_version):
             self.setup(problem)
         start = time.perf_counter()
         x, _, exitflag, info = daqp.solve(problem.H, problem.f, problem.A, problem.bupper,

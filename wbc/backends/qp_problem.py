@@ -31,6 +31,9 @@ class QpProblem:
         self.is_equality = np.zeros(m, dtype=bool)
         #: Name of the constraint group of each row of ``A`` (for failure diagnosis).
         self.row_groups: list[str] = [""] * m
+        #: Incremented whenever ``is_equality`` changes, so backends can cache what
+        #: depends on it.
+        self.structure_version = 0
 
     @classmethod
     def zeros(cls, n: int, m: int) -> QpProblem:
@@ -63,6 +66,7 @@ class QpProblem:
         for name in ("H", "f", "A", "bupper", "blower", "is_equality"):
             getattr(other, name)[...] = getattr(self, name)
         other.row_groups = list(self.row_groups)
+        other.structure_version = self.structure_version
         return other
 
 
