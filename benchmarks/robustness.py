@@ -1,0 +1,336 @@
+"""Robustness of the high five: pushes during the hold, and a plant unlike the controller's model.
+
+Run ``python -m benchmarks.robustness [--quick] [--json PATH]``.
+
+Two tables, measured in closed loop through the public API (``sim.control_loop.ControlLoop``
+with the default :class:`wbc.WholeBodyController`, a HighFive goal of 0.40 m held 1 s):
+
+1. Pushes on the base during the hold: direction x impulse (0.1 s pushes, starting 0.2 s into
+   the hold) -> S (SUCCEEDED), A (ABORTED with the robot up), F (fell: the base came down
+   to 0.2 m, or ended below standing height or tilted beyond 12 deg).
+2. Plant changes (:class:`sim.disturbances.PlantChanges`, sensor noise and control delay
+   through :class:`sim.disturbances.NoisyDelayedRobot`): outcome, raised-foot tracking, stance
+   sliding, lowest base, largest tilt.
+
+Every run is seeded and in simulated time: the same settings give the same tables.
+``--quick`` runs a 2 x 2 corner of the grid and two plant changes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from actions import GoalStatus, HighFiveGoal
+from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG
+from benchmarks.qp_timing import machine
+from sim.cli import MetricsHook
+from sim.control_loop import ControlLoop, TickHook
+from sim.disturbances import NoisyDelayedRobot, PlantChanges, Push, PushSchedule
+from sim.episode_metrics import EpisodeSummary
+from sim.mujoco_robot import MujocoRobot
+from sim.simulator import Go2Simulator
+from wbc.balance_controller import BalanceController
+from wbc.description import LEGS
+from wbc.leg_lift import LegLiftTiming
+from wbc.whole_body_controller import WholeBodyController
+
+HEIGHT_M, HOLD_S = 0.40, 1
+#: The robot stands this long [s] before the goal is sent (the plant spawns without contact
+#: forces; its feet settle in the first 20 ms).
+SETTLE_S = 0.3
+#: The hold starts this long [s] after the goal (shift, unload, raise).
+HOLD_START_S = LegLiftTiming().shift_s + LegLiftTiming().unload_s + LegLiftTiming().raise_s
+#: Pushes start this long [s] into the hold and last PUSH_DURATION_S [s].
+PUSH_INTO_HOLD_S, PUSH_DURATION_S = 0.2, 0.1
+#: The loop runs on this long [s] after the result, to see where the robot comes to rest.
+AFTER_S = 0.5
+#: Sim time [s] a goal may take before the run gives up on it.
+TIMEOUT_S = 30.0
+#: Below this base height [m], at any time, the robot has fallen.
+FALLEN_HEIGHT_M = 0.2
+#: A foot carrying more than this [N] counts as loaded when judging "standing".
+LOADED_N = 5.0
+
+DIRECTIONS_DEG = tuple(range(0, 360, 45))
+IMPULSES_NS = (2.0, 4.0, 6.0, 8.0, 10.0)
+QUICK_DIRECTIONS_DEG = (90, 315)
+QUICK_IMPULSES_NS = (4.0, 8.0)
+
+MENAGERIE = PlantChanges.menagerie_like()
+
+
+@dataclass(frozen=True)
+class PlantCase:
+    """One row of the plant table: a plant, and the sensors and delay between it and the loop."""
+
+    name: str = "nominal"
+    plant: PlantChanges = field(default_factory=PlantChanges)
+    delay_ticks: int = 0
+    position_noise_rad: float = 0.0
+    velocity_noise_rad_s: float = 0.0
+
+
+PLANT_CASES = (
+    PlantCase(),
+    PlantCase("floor friction 0.5", PlantChanges(floor_friction=0.5)),
+    PlantCase("floor friction 0.35", PlantChanges(floor_friction=0.35)),
+    PlantCase("payload 1.5 kg", PlantChanges(base_payload_kg=1.5)),
+    PlantCase("payload 3 kg", PlantChanges(base_payload_kg=3.0)),
+    PlantCase("menagerie joints (damping 0.1, friction loss 0.2, armature 0.01)", MENAGERIE),
+    PlantCase("joint damping 2.0", PlantChanges(joint_damping=2.0)),
+    PlantCase("rotor armature 0.01", PlantChanges(rotor_armature=0.01)),
+    PlantCase("delay 1 tick", delay_ticks=1),
+    PlantCase("delay 2 ticks", delay_ticks=2),
+    PlantCase("delay 4 ticks", delay_ticks=4),
+    PlantCase("noise 1e-3 rad, 1e-2 rad/s", position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
+    PlantCase("noise 5e-3 rad, 5e-2 rad/s", position_noise_rad=5e-3, velocity_noise_rad_s=5e-2),
+    PlantCase("all: friction 0.5, 1.5 kg, menagerie joints, delay 2, noise 1e-3",
+              replace(MENAGERIE, floor_friction=0.5, base_payload_kg=1.5), delay_ticks=2,
+              position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
+)
+QUICK_PLANT_CASES = (PLANT_CASES[1], PLANT_CASES[9])
+
+
+@dataclass
+class Episode:
+    """What one high five did, measured tick by tick from the goal to the end of the run."""
+
+    status: GoalStatus
+    message: str
+    #: Lowest and final base height [m], largest and final base tilt [deg].
+    min_height_m: float
+    final_height_m: float
+    max_tilt_deg: float
+    final_tilt_deg: float
+    #: At the end: four feet in stance in the controller and loaded in MuJoCo, base at
+    #: standing height and level within 5 deg.
+    standing: bool
+    #: The episode's quality metrics (``None`` when the run was not measured).
+    summary: EpisodeSummary | None
+    #: Sim time [s] the goal was sent.
+    start_s: float = 0.0
+    #: Feedback phases with the sim time [s] they were received, counted from ``start_s``.
+    phases: list[tuple[float, str]] = field(default_factory=list)
+    loop: ControlLoop | None = field(default=None, repr=False)
+
+    @property
+    def fell(self) -> bool:
+        """The base came down to ``FALLEN_HEIGHT_M``, or ended low or tilted beyond the limit."""
+        return (self.min_height_m < FALLEN_HEIGHT_M or self.final_height_m < STANDING_HEIGHT_M
+                or self.final_tilt_deg > TILT_LIMIT_DEG
+                or (self.summary is not None and self.summary.fell))
+
+    @property
+    def outcome(self) -> str:
+        """``S`` succeeded, ``A`` aborted with the robot up, ``F`` fell."""
+        if self.fell:
+            return "F"
+        return "S" if self.status is GoalStatus.SUCCEEDED else "A"
+
+    def row(self) -> dict[str, Any]:
+        """Plain values, JSON-ready (the metrics only when the run was measured)."""
+        row = {"outcome": self.outcome, "status": self.status.name, "message": self.message,
+               "min_height_m": round(self.min_height_m, 4),
+               "final_height_m": round(self.final_height_m, 4),
+               "max_tilt_deg": round(self.max_tilt_deg, 2),
+               "final_tilt_deg": round(self.final_tilt_deg, 2), "standing": self.standing,
+               "fell": self.fell}
+        if self.summary is not None:
+            s = self.summary
+            row.update(tracking_rms_mm=round(s.raised_foot_rms_mm, 3),
+                       holding_rms_mm=round(s.holding_rms_mm, 3),
+                       stance_sliding_max_mm=round(s.stance_sliding_max_mm, 3),
+                       qp_failures=s.qp_failures)
+        return row
+
+
+class _Extremes:
+    """Lowest base and largest tilt, tick by tick (a loop hook)."""
+
+    def __init__(self) -> None:
+        self.min_height_m = math.inf
+        self.max_tilt_deg = 0.0
+
+    def __call__(self, loop: ControlLoop, out: Any) -> None:
+        self.min_height_m = min(self.min_height_m, float(loop.context.q[2]))
+        self.max_tilt_deg = max(self.max_tilt_deg, loop.context.tilt_deg())
+
+
+def standing_on_four_feet(loop: ControlLoop) -> bool:
+    """Four feet in stance and loaded in MuJoCo, base at standing height and level."""
+    forces = loop.sim.foot_contact_forces()
+    return bool(loop.context.is_standing()) and all(forces[leg][2] > LOADED_N for leg in LEGS)
+
+
+def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
+              controller: BalanceController | None = None) -> ControlLoop:
+    """A control loop on a fresh standing MuJoCo GO2 built with ``case``'s plant and sensors."""
+    sim = Go2Simulator(plant=case.plant)
+    robot: Any = MujocoRobot(sim)
+    if case.delay_ticks or case.position_noise_rad or case.velocity_noise_rad_s:
+        robot = NoisyDelayedRobot(robot, position_noise_rad=case.position_noise_rad,
+                                  velocity_noise_rad_s=case.velocity_noise_rad_s,
+                                  delay_ticks=case.delay_ticks, seed=seed)
+    loop = ControlLoop(robot, controller or WholeBodyController())
+    loop.sim = sim
+    return loop
+
+
+def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
+                  hold_s: int = HOLD_S, height_m: float = HEIGHT_M, seed: int = 0,
+                  hooks: Sequence[TickHook] = (), after_s: float = AFTER_S,
+                  measure: bool = True) -> Episode:
+    """Stand ``SETTLE_S``, run one high five with ``pushes``, run on ``after_s``; measure it.
+
+    Args:
+        case: The plant, sensor noise and delay.
+        pushes: Pushes whose ``at_s`` counts from the goal's start [s].
+        hold_s: The goal's hold [s]. height_m: Its foot height [m].
+        seed: Seed of the sensor noise.
+        hooks: More loop hooks, called every tick from the goal on.
+        after_s: How long [s] the loop runs on after the result.
+        measure: Measure the episode with :class:`sim.episode_metrics.EpisodeMetrics`
+            (tracking, sliding...; it costs about half the control's time).
+    """
+    loop = make_loop(case, seed=seed)
+    loop.spin_for(SETTLE_S)
+    start = loop.sim.time_s
+    phases: list[tuple[float, str]] = []
+    metrics = MetricsHook(loop, lambda: phases[-1][1] if phases else "") if measure else None
+    extremes = _Extremes()
+    timed = [replace(push, at_s=start + push.at_s) for push in pushes]
+    loop.hooks += [PushSchedule(loop.sim, timed), extremes, *hooks]
+    if metrics is not None:
+        loop.hooks.append(metrics)
+
+    def on_feedback(message: Any) -> None:
+        phase = message.feedback.phase
+        if not phases or phases[-1][1] != phase:
+            phases.append((round(loop.context.now_s - start, 4), phase))
+
+    wall = time.perf_counter()
+    result = loop.client("high_five").send_goal_and_wait(
+        HighFiveGoal(target_height=height_m, hold_seconds=hold_s), timeout=TIMEOUT_S,
+        feedback_callback=on_feedback)
+    loop.spin_for(after_s)
+    summary = None if metrics is None else metrics.metrics.summary(time.perf_counter() - wall)
+    return Episode(
+        status=result.status, message=result.result.message,
+        min_height_m=extremes.min_height_m, final_height_m=float(loop.context.q[2]),
+        max_tilt_deg=extremes.max_tilt_deg, final_tilt_deg=loop.context.tilt_deg(),
+        standing=standing_on_four_feet(loop), summary=summary, start_s=start, phases=phases,
+        loop=loop)
+
+
+def hold_push(direction_deg: float, impulse_ns: float, *, body: str = "base",
+              duration_s: float = PUSH_DURATION_S, into_hold_s: float = PUSH_INTO_HOLD_S) -> Push:
+    """A horizontal push of ``impulse_ns`` [N s] over ``duration_s`` [s], during the hold."""
+    return Push(at_s=HOLD_START_S + into_hold_s, force_n=impulse_ns / duration_s,
+                duration_s=duration_s, direction_deg=direction_deg, body=body)
+
+
+# ---------------------------------------------------------------------------- the tables
+
+
+def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Run both tables; returns the report (JSON-ready)."""
+    directions = QUICK_DIRECTIONS_DEG if quick else DIRECTIONS_DEG
+    impulses = QUICK_IMPULSES_NS if quick else IMPULSES_NS
+    cells = []
+    for impulse in impulses:
+        for direction in directions:
+            episode = run_high_five(pushes=[hold_push(direction, impulse)], measure=False)
+            cells.append({"direction_deg": direction, "impulse_ns": impulse, **episode.row()})
+            log(f"push {impulse:g} N s toward {direction} deg: {episode.outcome} "
+                f"({episode.status.name}, lowest base {episode.min_height_m:.3f} m)")
+    outcomes = [cell["outcome"] for cell in cells]
+    grid = {
+        "directions_deg": list(directions), "impulses_ns": list(impulses),
+        "duration_s": PUSH_DURATION_S, "starts_into_hold_s": PUSH_INTO_HOLD_S, "cells": cells,
+        "succeeded": outcomes.count("S"), "aborted": outcomes.count("A"),
+        "fell": outcomes.count("F"), "success_rate": outcomes.count("S") / len(outcomes),
+        "any_fall": "F" in outcomes,
+    }
+    plants = []
+    for case in QUICK_PLANT_CASES if quick else PLANT_CASES:
+        episode = run_high_five(case)
+        plants.append({"name": case.name, "plant": vars(case.plant),
+                       "delay_ticks": case.delay_ticks,
+                       "position_noise_rad": case.position_noise_rad,
+                       "velocity_noise_rad_s": case.velocity_noise_rad_s, **episode.row()})
+        log(f"{case.name}: {episode.outcome} ({episode.status.name})")
+    return {"mode": "quick" if quick else "full", "machine": machine(),
+            "goal": {"target_height_m": HEIGHT_M, "hold_s": HOLD_S}, "push_grid": grid,
+            "plant_changes": plants}
+
+
+def _yes(flag: bool) -> str:
+    return "yes" if flag else "no"
+
+
+def format_report(report: dict[str, Any]) -> str:
+    """The two tables as text."""
+    grid = report["push_grid"]
+    title = (f"Pushes on the base during the hold ({grid['duration_s']:g} s, starting "
+             f"{grid['starts_into_hold_s']:g} s into a {report['goal']['hold_s']} s hold of a "
+             f"{report['goal']['target_height_m']:.2f} m high five)")
+    lines = [title,
+             "S succeeded, A aborted (foot put down, robot up), F fell", "",
+             "impulse [N s] | direction [deg]",
+             "              | " + " ".join(f"{d:>4}" for d in grid["directions_deg"])]
+    outcome = {(c["impulse_ns"], c["direction_deg"]): c["outcome"] for c in grid["cells"]}
+    for impulse in grid["impulses_ns"]:
+        lines.append(f"{impulse:>13g} | " + " ".join(
+            f"{outcome[impulse, d]:>4}" for d in grid["directions_deg"]))
+    total = len(grid["cells"])
+    lines += ["", f"succeeded {grid['succeeded']}/{total} ({100 * grid['success_rate']:.0f} %), "
+              f"aborted {grid['aborted']}, fell {grid['fell']}; any fall: "
+              f"{_yes(grid['any_fall'])}" + "".join(
+                  f"; fell at {c['impulse_ns']:g} N s toward {c['direction_deg']} deg"
+                  for c in grid["cells"] if c["outcome"] == "F"), "",
+              "Plant changes (no push)", ""]
+    header = (f"{'plant change':<66} {'result':<9} {'track RMS':>9} {'hold RMS':>8} "
+              f"{'sliding':>7} {'min z':>5} {'tilt':>5} {'end tilt':>8} {'QP fail':>7} "
+              f"{'standing':>8} {'fell':>4}")
+    units = (f"{'':<66} {'':<9} {'[mm]':>9} {'[mm]':>8} {'[mm]':>7} {'[m]':>5} {'[deg]':>5} "
+             f"{'[deg]':>8}")
+    lines += [header, units]
+    for row in report["plant_changes"]:
+        lines.append(f"{row['name']:<66} {row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
+                     f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
+                     f"{row['min_height_m']:>5.3f} {row['max_tilt_deg']:>5.1f} "
+                     f"{row['final_tilt_deg']:>8.1f} {row['qp_failures']:>7} "
+                     f"{_yes(row['standing']):>8} {_yes(row['fell']):>4}")
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command-line entry point."""
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.robustness",
+                                     description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="a 2 x 2 corner of the push grid and two plant changes")
+    parser.add_argument("--json", type=Path, default=Path("out/robustness.json"),
+                        help="where to write the report (default: out/robustness.json)")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    report = run(quick=args.quick, log=lambda msg: print(
+        f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
+    report["benchmark_wall_s"] = round(time.perf_counter() - started, 1)
+    print(format_report(report))
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(report, indent=1, allow_nan=False))
+    print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
