@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import io
+import json
 import math
 
 import numpy as np
@@ -333,6 +334,65 @@ def test_cli_high_five_options_are_valid_or_a_one_line_usage_error(goal_runs, he
     (action, goal, args), = goal_runs
     assert action == "high_five" and goal == HighFiveGoal(target_height=h, hold_seconds=s)
     assert args.push_dir == (90.0 if direction is None else float(direction))
+
+
+TRAJECTORY_KEYS = ("joint_names", "points", "path_tolerance", "goal_tolerance",
+                   "goal_time_tolerance", "positions", "velocities", "time_from_start", "name",
+                   "position", "sec", "nanosec", "effort", "other")
+json_scalars = st.one_of(st.none(), st.booleans(), big_ints, st.floats(allow_nan=False),
+                        st.text(max_size=6), st.sampled_from(JOINT_NAMES))
+json_values = st.recursive(json_scalars, lambda inner: st.one_of(
+    st.lists(inner, max_size=4),
+    st.dictionaries(st.sampled_from(TRAJECTORY_KEYS), inner, max_size=4)), max_leaves=12)
+
+
+@st.composite
+def trajectory_files(draw):
+    """A JSON trajectory file's content: a valid one, changed in one place, or anything."""
+    point = {"positions": [-0.1, -0.3, -1.6], "time_from_start": 2.0}
+    data = {"joint_names": ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"],
+            "points": [point], "goal_tolerance": [{"name": "FR_calf_joint", "position": 0.05}]}
+    change = draw(st.one_of(*map(st.just, ("file", "point", "all", "nothing"))))
+    event(f"change {change}")
+    if change == "all":
+        return draw(json_values)
+    if change != "nothing":
+        where = data if change == "file" else point
+        where[draw(st.sampled_from(TRAJECTORY_KEYS))] = draw(json_values)
+    return data
+
+
+@SETTINGS
+@given(content=trajectory_files())
+def test_cli_trajectory_file_is_a_goal_or_a_one_line_usage_error(goal_runs, tmp_path_factory,
+                                                                 content):
+    path = tmp_path_factory.getbasetemp() / "trajectory.json"
+    path.write_text(json.dumps(content))
+    goal_runs.clear()
+    code, stderr = run_cli(["trajectory", str(path)])
+    if code == "run":
+        event("valid")
+        (action, goal, _), = goal_runs
+        assert action == "follow_joint_trajectory"
+        assert goal.trajectory.joint_names == content["joint_names"]
+        return
+    event("usage error")
+    assert code == cli.EXIT_USAGE, stderr
+    lines = stderr.splitlines()
+    assert len(lines) == 1, stderr
+    assert lines[0].startswith(f"go2-wbc trajectory: error: FILE: {str(path)!r} is not a valid "
+                               "trajectory file: "), lines[0]
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "sim.cli's trajectory loader sorts unknown keys of mixed types (TypeError); argparse then "
+    "reports only 'invalid _trajectory_file value'"))
+def test_cli_trajectory_file_with_a_number_as_a_key(tmp_path):
+    path = tmp_path / "trajectory.yaml"
+    path.write_text("{1: a, other: b, joint_names: [FR_hip_joint], points: []}\n")
+    code, stderr = run_cli(["trajectory", str(path)])
+    assert code == cli.EXIT_USAGE
+    assert "is not a valid trajectory file: file: unknown key" in stderr, stderr
 
 
 # ---------------------------------------------------------------------------- joint orders
