@@ -62,7 +62,13 @@ def _coerce(hint: Any, value: Any, where: str) -> Any:
         return [_coerce(item_hint, item, f"{where}[{i}]") for i, item in enumerate(value)]
     if hint is float:
         if isinstance(value, numbers.Real) and not isinstance(value, bool):
-            return float(value)
+            try:
+                return float(value)
+            except OverflowError:  # an int beyond the float range
+                raise ConfigurationError(
+                    f"{where} must be a real number within the float range (about +-1.8e308); "
+                    f"received an integer of {len(str(abs(int(value))))} digits"
+                ) from None
         raise ConfigurationError(f"{where} must be a real number; received {_describe(value)}")
     if hint is int:
         if isinstance(value, numbers.Integral) and not isinstance(value, bool):

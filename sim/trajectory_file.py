@@ -26,7 +26,7 @@ def _mapping(value: Any, where: str, keys: Sequence[str], required: Sequence[str
     if not isinstance(value, dict):
         raise ConfigurationError(f"{where}: expected a mapping with keys {', '.join(keys)}, "
                                  f"received {type(value).__name__}")
-    unknown = sorted(set(value) - set(keys))
+    unknown = sorted(set(value) - set(keys), key=str)  # YAML keys may be numbers
     if unknown:
         raise ConfigurationError(f"{where}: unknown key {unknown[0]!r}; valid keys: "
                                  f"{', '.join(keys)}")

@@ -49,7 +49,13 @@ def as_float(name: str, value: Any, *, low: float | None = None, high: float | N
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ConfigurationError(f"{name}: expected a number, received {value!r}")
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ConfigurationError(
+            f"{name}: expected a number within the float range (about +-1.8e308), received "
+            f"an integer of {len(str(abs(int(value))))} digits"
+        ) from None
     if not np.isfinite(number):
         raise NonFiniteError(f"{name}: expected a finite number, received {number}")
     too_low = low is not None and (number < low if low_inclusive else number <= low)
