@@ -94,7 +94,8 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
             if self.context.consecutive_fallbacks >= FAULT_LIMIT_TICKS:
                 return StepResult.aborted(HighFiveResult(success=False, message=(
                     f"aborted: controller fault for {self.context.consecutive_fallbacks} ticks "
-                    f"({fault}); the robot holds its joints with damping")),
+                    f"({fault}); the controller holds the joints with damping while the fault "
+                    "lasts; a Stand goal puts a raised foot down afterwards")),
                     self._feedback(now_s, "aborted"))
             if not self._abort_reason:
                 self._abort_reason = f"controller fault ({fault})"
@@ -133,13 +134,21 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
             return StepResult.running(self._feedback(now_s, PHASE_NAMES[phase]))
         if self._abort_reason:
             return StepResult.aborted(HighFiveResult(success=False, message=(
-                f"aborted: {self._abort_reason}; the foot was put down and the robot is back "
-                "on four feet")), self._feedback(now_s, "aborted"))
+                f"aborted: {self._abort_reason}; {self._end_state()}")),
+                self._feedback(now_s, "aborted"))
         if self._cancel_reason:
             return self._canceled(now_s)
         return StepResult.succeeded(HighFiveResult(success=True, message=(
             f"high five done: foot raised to {lift.height_m:.3f} m, held "
             f"{self.goal.hold_seconds} s, back on four feet")), self._feedback(now_s, "complete"))
+
+    def _end_state(self) -> str:
+        """What state the unwind left the robot in, as measured."""
+        context = self.context
+        if context.is_standing():
+            return "the foot was put down and the robot is back on four feet"
+        return (f"the foot was put down but the robot is not standing (base height "
+                f"{context.q[2]:.2f} m, tilt {context.tilt_deg():.0f} deg)")
 
     def cancel(self, now_s: float, reason: str) -> None:
         self._cancel_reason = reason

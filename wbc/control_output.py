@@ -13,6 +13,8 @@ class ControlStatus(enum.Enum):
 
     #: The QP was solved; ``tau`` is the whole-body command.
     OK = "ok"
+    #: The backend failed on a feasible QP; ``tau`` is a fresh DAQP solution of it.
+    RESOLVED = "resolved"
     #: The QP was infeasible; ``tau`` solves it with the named limit group relaxed (and is
     #: clipped to the torque limits): the safest command while the robot is pushed hard.
     RELAXED = "relaxed"

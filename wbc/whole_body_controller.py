@@ -239,19 +239,24 @@ class WholeBodyController(ContactModes):
         status, message, group = ControlStatus.OK, "", ""
         if not result.found:
             self.failures += 1
-            group, relaxed = self.diagnose()
             message = f"QP failed: {result.reason}"
-            if group:
-                message += f"; infeasible constraint group: {group}"
             # The solver's workspace may hold a bad state after a failure.
             self.backend.setup(self.problem)
-            if relaxed is None:
-                return self._fallback(v, message, t0, group=group)
-            result, status = relaxed, ControlStatus.RELAXED
-            message += "; commanded the solution with that group relaxed"
+            retry = self._fresh_solve(self.problem)
+            if retry.found:  # a solver failure, not an infeasible problem
+                result, status = retry, ControlStatus.RESOLVED
+                message += "; the problem is feasible: commanded a fresh DAQP solution"
+            else:
+                group, relaxed = self.diagnose()
+                if group:
+                    message += f"; infeasible constraint group: {group}"
+                if relaxed is None:
+                    return self._fallback(v, message, t0, group=group)
+                result, status = relaxed, ControlStatus.RELAXED
+                message += "; commanded the solution with that group relaxed"
         x = result.x
         tau = self.problem.A[_TAU, :_S] @ x[:_S] + self.data.nle[6:]
-        if status is ControlStatus.RELAXED:
+        if status is not ControlStatus.OK:
             np.clip(tau, -self.tau_max, self.tau_max, out=tau)
         self._x_prev[:] = x[:_S]
         self.last_solution = x
@@ -415,6 +420,13 @@ class WholeBodyController(ContactModes):
             timings={"total": time.perf_counter() - t0},
         )
 
+    @staticmethod
+    def _fresh_solve(problem: QpProblem) -> QpResult:
+        """Solve with a new DAQP workspace: tells a solver failure from infeasibility."""
+        from wbc.backends.daqp_backend import DaqpBackend
+
+        return DaqpBackend().solve(problem)
+
     def diagnose(self) -> tuple[str, QpResult | None]:
         """Name the constraint group that makes the current QP infeasible.
 
@@ -423,8 +435,6 @@ class WholeBodyController(ContactModes):
         makes it solvable is named. Returns the name ('' if none) and, when that group is a
         limit (not physics), the relaxed problem's solution, usable as a command.
         """
-        from wbc.backends.daqp_backend import DaqpBackend
-
         def rows(group: slice):
             def relax(trial: QpProblem) -> None:
                 trial.lower[group], trial.upper[group] = -INFINITY, INFINITY
@@ -447,7 +457,7 @@ class WholeBodyController(ContactModes):
         for name, relax, usable in groups:
             trial = self.problem.copy()
             relax(trial)
-            result = DaqpBackend().solve(trial)
+            result = self._fresh_solve(trial)
             if result.found:
                 return name, result if usable else None
         return "", None

@@ -39,6 +39,15 @@ def register_backend(name: str, factory: Callable[[], QpBackend]) -> None:
     _REGISTRY[name] = factory
 
 
+def unregister_backend(name: str) -> None:
+    """Remove a backend registered with :func:`register_backend` (e.g. a test's)."""
+    _load_all()
+    if name not in _REGISTRY:
+        raise UnknownNameError(
+            f"unknown backend {name!r}; installed backends: {', '.join(sorted(_REGISTRY))}")
+    del _REGISTRY[name]
+
+
 def register_missing(name: str, reason: str) -> None:
     """Record why a backend is not available (shown when someone asks for it)."""
     _MISSING[name] = reason
