@@ -31,6 +31,11 @@ class ControllerConfig:
     com_weight: float = 20.0
     base_orientation_kp: float = 150.0
     base_orientation_weight: float = 10.0
+    #: Integral gain of the base orientation [1/s^3]: pulls the base level against joint
+    #: friction the model does not know (0 disables).
+    base_orientation_ki: float = 1000.0
+    #: Bound of each component of the orientation error's integral [rad s] (anti-windup).
+    base_orientation_integral_limit: float = 0.02
     foot_kp: float = 900.0
     foot_weight: float = 30.0
     posture_kp: float = 25.0

@@ -68,7 +68,7 @@ def add_least_squares(H, f, J, residual, weight):
 @numba.njit(cache=True)
 def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
              foot_pos, foot_acc, stance, radius, contact_kd,
-             com_ref, com_gains, R_target, base_ref, base_gains,
+             com_ref, com_gains, R_target, base_ref, base_gains, base_error,
              posture_ref, posture_gains, posture_weights,
              foot_ref, foot_gains,
              normals, offsets, n_edges, omega,
@@ -86,7 +86,8 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         stance (4,): stance flags. radius: foot sphere radius. contact_kd: contact damping.
         com_ref (3, 3): target position, velocity, feed-forward. com_gains: kp, kd, weight.
         R_target: base orientation target; base_ref (3, 3): its target angular velocity
-            and feed-forward in rows 1 and 2 (base frame); base_gains: kp, kd, weight.
+            and feed-forward in rows 1 and 2 (base frame); base_gains: kp, kd, weight;
+            base_error (3,): written with the orientation error (for integral action).
         posture_ref (3, 12), posture_gains, posture_weights (12): same for the joints.
         foot_ref (4, 3, 3), foot_gains (4, 3): same per foot (used for swing feet).
         normals (4, 2), offsets (4,), n_edges, omega: support polygon barrier.
@@ -201,6 +202,7 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
     # Base orientation: the Jacobian selects v[3:6], the drift is zero.
     kp, kd, w = base_gains[0], base_gains[1], base_gains[2]
     err = log3(R.T @ R_target)
+    base_error[:] = err
     for k in range(3):
         H[3 + k, 3 + k] += w
         f[3 + k] -= w * (kp * err[k] + kd * (base_ref[1, k] - v[3 + k]) + base_ref[2, k])

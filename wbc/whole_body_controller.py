@@ -32,6 +32,9 @@ _FRIC = slice(30, 46)      # friction pyramids
 _SUP = slice(46, 50)       # centre of mass inside the support polygon (soft)
 _M = 50
 _LEG_INDEX = {leg: i for i, leg in enumerate(LEGS)}
+_ALL_LEGS = tuple(LEGS)
+#: Per-tick decay of the orientation integral while not on four loaded feet (0.1 s).
+_INTEGRAL_FADE = 0.99
 _GROUPS = (("dynamics", _DYN), ("stance contacts", _CON), ("torque limits", _TAU),
            ("friction", _FRIC), ("support polygon", _SUP))
 
@@ -126,6 +129,7 @@ class WholeBodyController(ContactModes):
             self._max_force[leg] = self.config.max_normal_force_n
             self.foot_tasks[leg].set_weight(self.config.foot_weight)
         self.posture_task.set_joint_weights(np.ones(_NJ))
+        self._base_integral[:] = 0.0
         self._contacts_changed()
         gravity = pin.computeGeneralizedGravity(self.model, self.data, q)
         self._tau_prev = self._static_torques(q, gravity)
@@ -327,6 +331,9 @@ class WholeBodyController(ContactModes):
         self._n_edges = 0
         self._jc = np.zeros((3 * _NC, _NV))
         self._errors = np.zeros(3 + _NC)
+        self._base_error = np.zeros(3)
+        self._base_integral = np.zeros(3)
+        self._base_reference = np.zeros((3, 3))
         self._work_ms = np.zeros((_NV, _NV))
         self._work_foot_jac = np.zeros((_NC, 6, _NV))
         self._support_key: tuple[str, ...] | None = None
@@ -367,12 +374,29 @@ class WholeBodyController(ContactModes):
             task, i = self.foot_tasks[leg], _LEG_INDEX[leg]
             self._foot_refs[i] = task.reference
             self._foot_gains[i] = task.gains
+        # Integral action on the base orientation: joint friction the model lacks holds
+        # the base tilted when the proportional term alone needs less torque than it.
+        # Only on four feet: with a foot up, a small tilt is the tasks' fair compromise,
+        # and the integral would trade the raised foot's tracking for it; it then fades.
+        ki = cfg.base_orientation_ki
+        if ki:
+            integral = self._base_integral
+            if self._swing_legs or self._support != _ALL_LEGS:
+                integral *= _INTEGRAL_FADE
+            else:
+                integral += cfg.control_period_s * self._base_error
+                np.clip(integral, -cfg.base_orientation_integral_limit,
+                        cfg.base_orientation_integral_limit, out=integral)
+        np.copyto(self._base_reference, self.base_task.reference)
+        if ki:
+            self._base_reference[2] += ki * self._base_integral
         qp_kernel.assemble(
             data.M, data.nle, data.J, data.Jcom, data.com[0], data.vcom[0], data.acom[0],
             data.oMi[1].rotation, q, v, self._foot_pos, self._foot_acc, self._stance_flags,
             FOOT_RADIUS_M, self.contact_task.gains[1],
             self.com_task.reference, self.com_task.gains,
-            self.base_task.rotation, self.base_task.reference, self.base_task.gains,
+            self.base_task.rotation, self._base_reference, self.base_task.gains,
+            self._base_error,
             self.posture_task.reference, self.posture_task.gains, self.posture_task.joint_weights,
             self._foot_refs, self._foot_gains,
             self._normals, self._offsets, self._n_edges, cfg.support_omega,
