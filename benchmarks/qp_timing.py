@@ -320,6 +320,13 @@ def format_report(report: dict[str, Any]) -> str:
             f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}"
             f"{_fmt(row['cpu_median_us']):>8}{_fmt(row['cpu_ratio_to_placo'], 2):>8}"
             f"{_fmt(100 * row['cpu_share']):>5}")
+    h2h = report["head_to_head"]
+    d, p = h2h["default"], h2h["placo"]
+    lines += ["", (f"Head to head, {h2h['pairs']} alternating pair(s) of episodes, ticks pooled: "
+                   f"default median {d['median']:.0f} us (p99 {d['p99']:.0f}), PlaCo median "
+                   f"{p['median']:.0f} us (p99 {p['p99']:.0f}): ratio "
+                   f"{h2h['pooled_median_ratio']:.2f}; per pair "
+                   + ", ".join(f"{r:.2f}" for r in h2h["pair_median_ratios"]))]
     lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
     head = (f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}"
             f"{'p99':>8}{'cpu med':>8}")
@@ -380,6 +387,30 @@ def _controllers() -> list[tuple[str, Callable[[], BalanceController]]]:
     return makers
 
 
+def run_head_to_head(*, pairs: int, hold_s: float, stop_after_s: float | None,
+                     timing: LegLiftTiming | None) -> dict[str, Any]:
+    """The default controller and PlaCo, episode for episode, alternating.
+
+    On a shared or virtual machine the speed drifts from one episode to the next by more
+    than the two controllers differ; alternating them and pooling their ticks cancels the
+    drift that one episode per controller leaves in the ratio.
+    """
+    samples: dict[str, list[float]] = {DEFAULT: [], PLACO: []}
+    ratios = []
+    for _ in range(pairs):
+        medians = {}
+        for name, factory in ((DEFAULT, WholeBodyController), (PLACO, PlacoController)):
+            episode = run_episode(factory(), hold_s=hold_s, stop_after_s=stop_after_s,
+                                  timing=timing)
+            samples[name] += episode.timings["total"]
+            medians[name] = float(np.median(episode.timings["total"]))
+        ratios.append(medians[DEFAULT] / medians[PLACO])
+    stats = {name: _stats_us(values) for name, values in samples.items()}
+    return {"pairs": pairs, "default": stats[DEFAULT], "placo": stats[PLACO],
+            "pooled_median_ratio": stats[DEFAULT]["median"] / stats[PLACO]["median"],
+            "pair_median_ratios": ratios}
+
+
 def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Measure everything; returns the report (see the module docstring)."""
     hold_s = 0.3 if quick else 2.0
@@ -404,6 +435,10 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
             row["ratio_to_placo"] = row["median_us"] / placo["median_us"] if placo else None
             row["cpu_ratio_to_placo"] = (row["cpu_median_us"] / placo["cpu_median_us"]
                                          if placo else None)
+
+    log("  head to head: default and PlaCo alternating")
+    head_to_head = run_head_to_head(pairs=1 if quick else 3, hold_s=hold_s, stop_after_s=stop,
+                                    timing=QUICK_TIMING if quick else None)
 
     log("  episode quality: default backend, whole lift")
     quality = run_episode(WholeBodyController(), hold_s=hold_s, stop_after_s=None, quality=True)
@@ -454,6 +489,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
                     "warmup_ticks_excluded": WARMUP_TICKS,
                     "stop_after_lift_s": stop, "description": lift_desc},
         "backends": rows,
+        "head_to_head": head_to_head,
         "scaling": scaling,
         "episode_table": {"controller": f"{DEFAULT} backend",
                           "description": f"whole lift, hold {hold_s:g} s",
