@@ -322,11 +322,12 @@ def format_report(report: dict[str, Any]) -> str:
             f"{_fmt(100 * row['cpu_share']):>5}")
     h2h = report["head_to_head"]
     d, p = h2h["default"], h2h["placo"]
-    lines += ["", (f"Head to head, {h2h['pairs']} alternating pair(s) of episodes, ticks pooled: "
-                   f"default median {d['median']:.0f} us (p99 {d['p99']:.0f}), PlaCo median "
-                   f"{p['median']:.0f} us (p99 {p['p99']:.0f}): ratio "
-                   f"{h2h['pooled_median_ratio']:.2f}; per pair "
-                   + ", ".join(f"{r:.2f}" for r in h2h["pair_median_ratios"]))]
+    low, mid, high = h2h["block_ratio_p10_p50_p90"]
+    lines += ["", (f"Head to head, the same lift in lockstep (turns of {h2h['block_ticks']} "
+                   f"ticks): default median {d['median']:.0f} us (p99 {d['p99']:.0f}), PlaCo "
+                   f"median {p['median']:.0f} us (p99 {p['p99']:.0f}): ratio of medians "
+                   f"{h2h['median_ratio']:.2f}; per turn p10/p50/p90 {low:.2f}/{mid:.2f}/"
+                   f"{high:.2f}")]
     lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
     head = (f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}"
             f"{'p99':>8}{'cpu med':>8}")
@@ -387,28 +388,50 @@ def _controllers() -> list[tuple[str, Callable[[], BalanceController]]]:
     return makers
 
 
-def run_head_to_head(*, pairs: int, hold_s: float, stop_after_s: float | None,
+def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | None,
                      timing: LegLiftTiming | None) -> dict[str, Any]:
-    """The default controller and PlaCo, episode for episode, alternating.
+    """The default controller and PlaCo through the same lift in lockstep.
 
-    On a shared or virtual machine the speed drifts from one episode to the next by more
-    than the two controllers differ; alternating them and pooling their ticks cancels the
-    drift that one episode per controller leaves in the ratio.
+    Each drives its own simulation; they take turns every ``block_ticks`` ticks. On a shared
+    or virtual machine the speed drifts from one episode to the next by more than the two
+    controllers differ (medians of single episodes here moved by 2x); in lockstep both see
+    the same drift, so the ratio of their medians measures the controllers.
     """
-    samples: dict[str, list[float]] = {DEFAULT: [], PLACO: []}
-    ratios = []
-    for _ in range(pairs):
-        medians = {}
-        for name, factory in ((DEFAULT, WholeBodyController), (PLACO, PlacoController)):
-            episode = run_episode(factory(), hold_s=hold_s, stop_after_s=stop_after_s,
-                                  timing=timing)
-            samples[name] += episode.timings["total"]
-            medians[name] = float(np.median(episode.timings["total"]))
-        ratios.append(medians[DEFAULT] / medians[PLACO])
-    stats = {name: _stats_us(values) for name, values in samples.items()}
-    return {"pairs": pairs, "default": stats[DEFAULT], "placo": stats[PLACO],
-            "pooled_median_ratio": stats[DEFAULT]["median"] / stats[PLACO]["median"],
-            "pair_median_ratios": ratios}
+    runs = {}
+    for name, factory in ((DEFAULT, WholeBodyController), (PLACO, PlacoController)):
+        sim, controller = Go2Simulator(), factory()
+        controller.reset(sim.state()[0])
+        for _ in range(WARMUP_TICKS):
+            sim.step(controller.step(*sim.state()).tau)
+        lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
+        lift.start(sim.time_s)
+        runs[name] = (sim, controller, lift, sim.time_s, [])
+
+    def running(run: tuple) -> bool:
+        sim, _, lift, start, _ = run
+        return lift.phase is not LiftPhase.DONE and (
+            stop_after_s is None or sim.time_s - start < stop_after_s - 1e-9)
+
+    while any(running(run) for run in runs.values()):
+        for run in runs.values():
+            sim, controller, lift, _, samples = run
+            for _ in range(block_ticks):
+                if not running(run):
+                    break
+                lift.update(sim.time_s)
+                q, v = sim.state()
+                out, _ = _timed_step(controller, q, v)
+                samples.append(out.timings["total"])
+                sim.step(out.tau)
+    default, placo = runs[DEFAULT][4], runs[PLACO][4]
+    blocks = min(len(default), len(placo)) // block_ticks
+    ratios = [float(np.median(default[i * block_ticks:(i + 1) * block_ticks])
+                    / np.median(placo[i * block_ticks:(i + 1) * block_ticks]))
+              for i in range(blocks)]
+    return {"block_ticks": block_ticks, "default": _stats_us(default),
+            "placo": _stats_us(placo),
+            "median_ratio": float(np.median(default) / np.median(placo)),
+            "block_ratio_p10_p50_p90": [float(np.percentile(ratios, k)) for k in (10, 50, 90)]}
 
 
 def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
@@ -436,8 +459,8 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
             row["cpu_ratio_to_placo"] = (row["cpu_median_us"] / placo["cpu_median_us"]
                                          if placo else None)
 
-    log("  head to head: default and PlaCo alternating")
-    head_to_head = run_head_to_head(pairs=1 if quick else 3, hold_s=hold_s, stop_after_s=stop,
+    log("  head to head: default and PlaCo in lockstep")
+    head_to_head = run_head_to_head(block_ticks=100, hold_s=hold_s, stop_after_s=stop,
                                     timing=QUICK_TIMING if quick else None)
 
     log("  episode quality: default backend, whole lift")
