@@ -48,6 +48,7 @@ import numpy as np
 from scipy.interpolate import BPoly, make_interp_spline
 
 from actions.behaviour import Behaviour, StepResult
+from actions.feedback_throttle import FeedbackThrottle
 from actions.messages import (
     Duration,
     FollowJointTrajectoryFeedback,
@@ -60,11 +61,11 @@ from actions.messages import (
 )
 from actions.responses import GoalResponse, Rejection
 from actions.robot_context import STANDING_HEIGHT_M, RobotContext
+from wbc.contact_modes import LEG_REACH_M
 from wbc.controller_config import ControllerConfig
 from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.leg_lift import LegLift, LiftPhase
-from wbc.contact_modes import LEG_REACH_M
 
 Result = FollowJointTrajectoryResult
 INVALID_GOAL, INVALID_JOINTS = Result.INVALID_GOAL, Result.INVALID_JOINTS
@@ -82,7 +83,6 @@ DEFAULT_GOAL_TIME_TOLERANCE_S = 0.5
 #: 0.05 mrad from 100 on; the peak error during the move is 2.7 mrad from 10 on.
 TRACKING_WEIGHT = 100.0
 #: Feedback is published at every phase change and at least this often [s] in between.
-FEEDBACK_PERIOD_S = 0.02
 #: Feedback phase names of the release.
 RELEASE_PHASES = {LiftPhase.SHIFTING: "shifting", LiftPhase.UNLOADING: "unloading"}
 #: Largest base tilt [deg] at which a goal is accepted.
@@ -290,8 +290,7 @@ class FollowJointTrajectoryBehaviour(
         self._t0 = math.inf  # trajectory time 0 [s], once the leg is free
         self._holds_leg = False
         self._cancel_reason = ""
-        self._phase = ""
-        self._last_feedback_s = -math.inf
+        self._throttle = FeedbackThrottle()
 
     def start(self, goal: FollowJointTrajectoryGoal, now_s: float) -> None:
         try:
@@ -444,13 +443,12 @@ class FollowJointTrajectoryBehaviour(
 
     def _feedback(self, now_s: float, phase: str, t: float, desired: Any,
                   actual: tuple[np.ndarray, np.ndarray]) -> FollowJointTrajectoryFeedback | None:
-        """Feedback at a phase change, else at most every FEEDBACK_PERIOD_S.
+        """Feedback at a phase change, else at the throttle's period.
 
         ``desired`` is ``(positions, velocities, accelerations)`` or positions alone (held).
         """
-        if phase == self._phase and now_s - self._last_feedback_s < FEEDBACK_PERIOD_S - 1e-9:
+        if not self._throttle.due(now_s, phase):
             return None
-        self._phase, self._last_feedback_s = phase, now_s
         if isinstance(desired, np.ndarray):
             desired = (desired, np.zeros_like(desired), np.zeros_like(desired))
         when = Duration.from_seconds(max(t, 0.0))

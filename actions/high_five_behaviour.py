@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from actions.behaviour import Behaviour, StepResult
+from actions.feedback_throttle import FeedbackThrottle
 from actions.messages import HighFiveFeedback, HighFiveGoal, HighFiveResult
 from actions.responses import GoalResponse, Rejection
 from actions.robot_context import RobotContext
@@ -14,8 +15,6 @@ from wbc.posture_transition import PostureTransition, TransitionPhase
 
 #: Longest hold [s] a goal may ask for.
 MAX_HOLD_S = 60
-#: Feedback is published at every phase change and at least this often [s] in between.
-FEEDBACK_PERIOD_S = 0.02
 #: Rejection codes of HighFive goals (beside the runner's own, 1 to 4).
 INVALID_TARGET_HEIGHT, INVALID_HOLD_SECONDS, ROBOT_NOT_READY = 10, 11, 12
 
@@ -69,8 +68,7 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
         self._stand: PostureTransition | None = None
         self._stood = False  # a stand-up took the first share of the progress
         self._lift: LegLift | None = None
-        self._phase = ""
-        self._last_feedback_s = -math.inf
+        self._throttle = FeedbackThrottle()
         self._progress = 0.0
         self._cancel_reason = ""
         self._abort_reason = ""
@@ -166,11 +164,9 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
         return HighFiveResult(success=False, message=message)
 
     def _feedback(self, now_s: float, phase: str) -> HighFiveFeedback | None:
-        """Feedback at a phase change, else at most every FEEDBACK_PERIOD_S."""
-        terminal = phase in ("complete", "canceled", "aborted")
-        if phase == self._phase and now_s - self._last_feedback_s < FEEDBACK_PERIOD_S - 1e-9:
+        """Feedback at a phase change, else at the throttle's period."""
+        if not self._throttle.due(now_s, phase):
             return None
-        if terminal:
+        if phase in ("complete", "canceled", "aborted"):
             self._progress = 1.0
-        self._phase, self._last_feedback_s = phase, now_s
         return HighFiveFeedback(phase=phase, progress=float(self._progress))

@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 from actions.behaviour import Behaviour, StepResult
+from actions.feedback_throttle import FeedbackThrottle
 from actions.messages import PoseGoal
 from actions.responses import GoalResponse, Rejection
 from actions.robot_context import RobotContext
@@ -15,7 +16,6 @@ from wbc.posture_transition import PostureTransition, TransitionPhase
 INVALID_DURATION = 20
 #: Durations [s] a Stand or Sit goal may ask for.
 MIN_DURATION_S, MAX_DURATION_S = 0.5, 10.0
-_FEEDBACK_PERIOD_S = 0.02
 
 
 def validate_pose_goal(goal: PoseGoal) -> GoalResponse | Rejection:
@@ -48,8 +48,7 @@ class PoseBehaviour(Behaviour[PoseGoal, Any, Any]):
         self.phase_name = phase_name
         self._transition: PostureTransition | None = None
         self._cancel_reason = ""
-        self._last_phase = ""
-        self._last_feedback_s = -math.inf
+        self._throttle = FeedbackThrottle()
 
     def start(self, goal: PoseGoal, now_s: float) -> None:
         self._transition = PostureTransition(self.context.controller, self.pose,
@@ -83,7 +82,6 @@ class PoseBehaviour(Behaviour[PoseGoal, Any, Any]):
         return self.result_type(success=False, message=message)
 
     def _feedback(self, now_s: float, phase: str, progress: float) -> Any:
-        if phase == self._last_phase and now_s - self._last_feedback_s < _FEEDBACK_PERIOD_S - 1e-9:
+        if not self._throttle.due(now_s, phase):
             return None
-        self._last_phase, self._last_feedback_s = phase, now_s
         return self.feedback_type(phase=phase, progress=float(progress))

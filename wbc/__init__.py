@@ -10,8 +10,12 @@ from typing import Any
 
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import (
-    ConfigurationError, DescriptionNotFoundError, NonFiniteError, ReachabilityError,
-    UnknownNameError, WbcError,
+    ConfigurationError,
+    DescriptionNotFoundError,
+    NonFiniteError,
+    ReachabilityError,
+    UnknownNameError,
+    WbcError,
 )
 from wbc.joint_map import JointMap
 

@@ -40,10 +40,25 @@ class ControlOutput:
     infeasible_group: str = ""
     #: Per-task error norms: ``{"com": m, "base_orientation": rad, "FR_foot": m, ...}``.
     task_errors: dict[str, float] = field(default_factory=dict)
-    #: Stage durations [s]: ``model``, ``tasks``, ``assembly``, ``solve``, ``total``.
+    #: Stage durations [s]: ``model``, ``assembly``, ``solve``, ``total``.
     timings: dict[str, float] = field(default_factory=dict)
-    #: Largest equality and inequality violation of the returned QP solution.
-    violation: tuple[float, float] = (0.0, 0.0)
+
+    @classmethod
+    def damped_hold(cls, tau_good: np.ndarray, v: np.ndarray, *, damping: float,
+                    tau_max: np.ndarray, message: str, elapsed_s: float,
+                    group: str = "") -> ControlOutput:
+        """The safe fallback: the last good torques with joint damping, inside the limits.
+
+        Non-finite joint velocities (a broken sensor) are taken as zero.
+        """
+        v = np.asarray(v, dtype=float).reshape(-1)
+        vj = np.zeros(len(tau_good))
+        if v.shape == (len(tau_good) + 6,):
+            vj = np.where(np.isfinite(v[6:]), v[6:], 0.0)
+        tau = np.clip(tau_good - damping * vj, -tau_max, tau_max)
+        return cls(tau=tau, qdd=np.full(len(tau_good) + 6, np.nan),
+                   forces=np.full((4, 3), np.nan), status=ControlStatus.FALLBACK,
+                   message=message, infeasible_group=group, timings={"total": elapsed_s})
 
     @property
     def ok(self) -> bool:

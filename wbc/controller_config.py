@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+from wbc.errors import ConfigurationError
 from wbc.validation import as_float
 
 
@@ -74,21 +75,14 @@ class ControllerConfig:
         for f in fields(self):
             if f.name == "backend":
                 if not isinstance(self.backend, str) or not self.backend:
-                    raise_config("backend", self.backend, "a backend name")
+                    raise ConfigurationError(
+                        f"backend: expected a backend name, received {self.backend!r}")
                 continue
             value = getattr(self, f.name)
             as_float(f.name, value, low=0.0, low_inclusive=f.name not in positive)
         if self.min_normal_force_n >= self.max_normal_force_n:
-            from wbc.errors import ConfigurationError
-
             raise ConfigurationError(
                 f"min_normal_force_n: expected less than max_normal_force_n "
                 f"({self.max_normal_force_n:g} N), received {self.min_normal_force_n:g} N"
             )
 
-
-def raise_config(name: str, value: object, expected: str) -> None:
-    """Raise a :class:`ConfigurationError` naming the field, the value and what is valid."""
-    from wbc.errors import ConfigurationError
-
-    raise ConfigurationError(f"{name}: expected {expected}, received {value!r}")

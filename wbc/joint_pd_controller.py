@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
+from wbc.description import FOOT_FRAMES, LEGS, Go2Description
 from wbc.validation import as_float, as_vector, check_name
 
 
@@ -67,5 +67,3 @@ class JointPdController:
         return (self.kp * (self.q_ref[7:] - q[7:]) - self.kd * v[6:]
                 + self.gravity_torques(q))
 
-
-__all__ = ["JointPdController", "JOINT_NAMES"]

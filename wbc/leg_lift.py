@@ -7,13 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wbc.balance_controller import BalanceController
+from wbc.contact_modes import LEG_REACH_M
 from wbc.description import LEGS
 from wbc.errors import ConfigurationError, ReachabilityError
 from wbc.min_jerk import min_jerk, min_jerk_segment
 from wbc.support_polygon import SupportPolygon
 from wbc.validation import as_float, check_name
-from wbc.balance_controller import BalanceController
-from wbc.contact_modes import LEG_REACH_M
 
 #: Foot heights [m] (foot centre above the ground) the lift accepts.
 MIN_HEIGHT_M, MAX_HEIGHT_M = 0.10, 0.50

@@ -11,12 +11,12 @@ import numpy as np
 import pinocchio as pin
 import placo
 
+from wbc.contact_modes import ContactModes
 from wbc.control_output import ControlOutput, ControlStatus
 from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float, as_vector, check_name
-from wbc.contact_modes import ContactModes
 
 _NV, _NJ = 18, 12
 #: Smallest normal-force ratio the force-weight ramp divides by (caps the weight at 1e6x).
@@ -366,16 +366,9 @@ class PlacoController(ContactModes):
         """Safe command: the last good torques with joint damping, inside the limits."""
         self.failures += 1
         self._last = None
-        vj = np.zeros(_NJ)
-        v = np.asarray(v, dtype=float).reshape(-1)
-        if v.shape == (_NV,):
-            vj = np.where(np.isfinite(v[6:]), v[6:], 0.0)
-        tau = np.clip(self._tau_good - self.config.fallback_damping * vj, -self.tau_max,
-                      self.tau_max)
-        return ControlOutput(
-            tau=tau, qdd=np.full(_NV, np.nan), forces=np.full((len(LEGS), 3), np.nan),
-            status=ControlStatus.FALLBACK, message=message,
-            timings={"total": time.perf_counter() - t0},
+        return ControlOutput.damped_hold(
+            self._tau_good, v, damping=self.config.fallback_damping, tau_max=self.tau_max,
+            message=message, elapsed_s=time.perf_counter() - t0,
         )
 
 

@@ -96,7 +96,7 @@ def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
         tau_prev (12,), torque_rate_weight: cost ``w |tau(x) - tau_prev|^2`` on the torque
             change from the previous tick, ``tau(x) = S x + h_a`` (S: the torque rows of A).
         H, f, A, lower, upper, lb, ub: the QP, written in place.
-        jc (12, 18): written with the contact Jacobians (for torque recovery).
+        jc (12, 18): scratch for the rolling-contact Jacobians (they end up in ``A``).
         errors (7,): written with error norms: com, base, posture, then the four feet.
         work_ms (18, 18), work_foot_jac (4, 6, 18): scratch space, allocated once by the
             caller (no allocation in the tick).

@@ -13,8 +13,8 @@ import pinocchio as pin
 from tasks import BaseOrientationTask, ComTask, ContactTask, FramePositionTask, PostureTask
 from wbc import qp_kernel
 from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
-from wbc.control_output import ControlOutput, ControlStatus
 from wbc.contact_modes import ContactModes
+from wbc.control_output import ControlOutput, ControlStatus
 from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
 from wbc.errors import ConfigurationError
@@ -431,18 +431,11 @@ class WholeBodyController(ContactModes):
         """Safe command: the last good torques with joint damping, inside the limits."""
         if not group:  # QP failures were counted where they happened
             self.failures += 1
-        vj = np.zeros(_NJ)
-        v = np.asarray(v, dtype=float).reshape(-1)
-        if v.shape == (_NV,):
-            vj = np.where(np.isfinite(v[6:]), v[6:], 0.0)
-        tau = np.clip(self._tau_good - self.config.fallback_damping * vj, -self.tau_max,
-                      self.tau_max)
-        self._tau_prev = tau
-        return ControlOutput(
-            tau=tau, qdd=np.full(_NV, np.nan), forces=np.full((_NC, 3), np.nan),
-            status=ControlStatus.FALLBACK, message=message, infeasible_group=group,
-            timings={"total": time.perf_counter() - t0},
-        )
+        out = ControlOutput.damped_hold(
+            self._tau_good, v, damping=self.config.fallback_damping, tau_max=self.tau_max,
+            message=message, elapsed_s=time.perf_counter() - t0, group=group)
+        self._tau_prev = out.tau
+        return out
 
     @staticmethod
     def _fresh_solve(problem: QpProblem) -> QpResult:

@@ -1,7 +1,11 @@
 """QP solver backends behind one small interface, picked by name."""
 
 from wbc.backends.backend import (
-    QpBackend, available_backends, make_backend, missing_backends, register_backend,
+    QpBackend,
+    available_backends,
+    make_backend,
+    missing_backends,
+    register_backend,
     unregister_backend,
 )
 from wbc.backends.qp_problem import INFINITY, QpProblem, QpResult
