@@ -1,4 +1,4 @@
-"""The robot as behaviours see it: state in, torques out, joints wired by name.
+"""The robot as behaviours see it: state in, motor commands out, joints wired by name.
 
 Sim-to-real: a behaviour never talks to MuJoCo or to a motor driver. It talks to a
 :class:`RobotInterface` in the robot's own joint order (a MuJoCo plant, the Unitree SDK's
@@ -14,6 +14,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from wbc.joint_map import JointMap
+from wbc.motor_command import MotorCommand
 from wbc.validation import as_vector
 
 
@@ -32,8 +33,13 @@ class RobotInterface(Protocol):
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q (19,), v (18,))``: Pinocchio-convention base, joints in the robot's order."""
 
-    def write_torques(self, tau: np.ndarray) -> None:
-        """Command joint torques [N m] (12,) in the robot's order, for one control period."""
+    def write_command(self, command: MotorCommand) -> None:
+        """Hand the motor drivers one command (arrays (12,) in the robot's order).
+
+        The drivers apply ``tau_ff + kp (q_des - q) + kd (dq_des - dq)`` until the next
+        command, one control period later. A plant that takes bare torques applies
+        :meth:`~wbc.motor_command.MotorCommand.torque_at` the state it measured.
+        """
 
 
 class MappedRobot:
@@ -62,6 +68,6 @@ class MappedRobot:
         v[6:] = self.joint_map.from_other(v[6:])
         return q, v
 
-    def write_torques(self, tau: np.ndarray) -> None:
-        """Torques [N m] in the description order, sent in the robot's order."""
-        self.robot.write_torques(self.joint_map.to_other(tau))
+    def write_command(self, command: MotorCommand) -> None:
+        """A motor command in the description order, sent in the robot's order."""
+        self.robot.write_command(command.reordered(self.joint_map.index))

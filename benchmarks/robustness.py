@@ -33,7 +33,8 @@ from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG
 from benchmarks.qp_timing import machine
 from sim.cli import MetricsHook
 from sim.control_loop import ControlLoop, TickHook
-from sim.disturbances import NoisyDelayedRobot, PlantChanges, Push, PushSchedule
+from sim.disturbances import NoisyDelayedRobot, Push, PushSchedule
+from sim.plant import Plant
 from sim.episode_metrics import EpisodeSummary
 from sim.mujoco_robot import MujocoRobot
 from sim.simulator import Go2Simulator
@@ -64,7 +65,7 @@ IMPULSES_NS = (2.0, 4.0, 6.0, 8.0, 10.0)
 QUICK_DIRECTIONS_DEG = (90, 315)
 QUICK_IMPULSES_NS = (4.0, 8.0)
 
-MENAGERIE = PlantChanges.menagerie_like()
+MENAGERIE = Plant.preset("menagerie")
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,7 @@ class PlantCase:
     """One row of the plant table: a plant, and the sensors and delay between it and the loop."""
 
     name: str = "nominal"
-    plant: PlantChanges = field(default_factory=PlantChanges)
+    plant: Plant = field(default_factory=Plant)
     delay_ticks: int = 0
     position_noise_rad: float = 0.0
     velocity_noise_rad_s: float = 0.0
@@ -80,20 +81,20 @@ class PlantCase:
 
 PLANT_CASES = (
     PlantCase(),
-    PlantCase("floor friction 0.5", PlantChanges(floor_friction=0.5)),
-    PlantCase("floor friction 0.35", PlantChanges(floor_friction=0.35)),
-    PlantCase("payload 1.5 kg", PlantChanges(base_payload_kg=1.5)),
-    PlantCase("payload 3 kg", PlantChanges(base_payload_kg=3.0)),
-    PlantCase("menagerie joints (damping 0.1, friction loss 0.2, armature 0.01)", MENAGERIE),
-    PlantCase("joint damping 2.0", PlantChanges(joint_damping=2.0)),
-    PlantCase("rotor armature 0.01", PlantChanges(rotor_armature=0.01)),
+    PlantCase("foot friction 0.5", MENAGERIE.with_params(foot_friction=0.5)),
+    PlantCase("foot friction 0.35", MENAGERIE.with_params(foot_friction=0.35)),
+    PlantCase("payload 1.5 kg", MENAGERIE.with_params(payload_kg=1.5)),
+    PlantCase("payload 3 kg", MENAGERIE.with_params(payload_kg=3.0)),
+    PlantCase("ideal plant", Plant.preset("ideal")),
+    PlantCase("unitree-mujoco plant", Plant.preset("unitree-mujoco")),
+    PlantCase("identified plant", Plant.preset("identified")),
     PlantCase("delay 1 tick", delay_ticks=1),
     PlantCase("delay 2 ticks", delay_ticks=2),
     PlantCase("delay 4 ticks", delay_ticks=4),
     PlantCase("noise 1e-3 rad, 1e-2 rad/s", position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
     PlantCase("noise 5e-3 rad, 5e-2 rad/s", position_noise_rad=5e-3, velocity_noise_rad_s=5e-2),
-    PlantCase("all: friction 0.5, 1.5 kg, menagerie joints, delay 2, noise 1e-3",
-              replace(MENAGERIE, floor_friction=0.5, base_payload_kg=1.5), delay_ticks=2,
+    PlantCase("all: friction 0.5, 1.5 kg, delay 2, noise 1e-3",
+              MENAGERIE.with_params(foot_friction=0.5, payload_kg=1.5), delay_ticks=2,
               position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
 )
 QUICK_PLANT_CASES = (PLANT_CASES[1], PLANT_CASES[9])

@@ -1,4 +1,4 @@
-"""The 1 kHz loop that wires a plant, the whole-body controller and the action runner."""
+"""The control loop (1 kHz by default) that wires a plant, the whole-body controller and the action runner."""
 
 from __future__ import annotations
 
@@ -13,17 +13,21 @@ from actions.go2_actions import make_go2_runner
 from actions.robot_context import RobotContext
 from actions.robot_interface import MappedRobot, RobotInterface
 from sim.mujoco_robot import MujocoRobot
+from sim.plant import DEFAULT_PLANT, Plant
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput
-from wbc.description import JOINT_NAMES, Go2Description
+from wbc.description import Go2Description
+from wbc.errors import ConfigurationError
 from wbc.whole_body_controller import WholeBodyController
 
 TickHook = Callable[["ControlLoop", ControlOutput], None]
+#: Default physics timestep [s] of a simulated loop.
+PHYSICS_TIMESTEP_S = 1e-3
 
 
 class ControlLoop:
-    """Reads the robot, ticks the actions, runs the controller, writes torques: 1 kHz.
+    """Reads the robot, ticks the actions, runs the controller, writes the motor command.
 
     ``spin_once()`` is one control period, in simulated time; it is registered with the
     runner so that ``ActionClient.send_goal_and_wait`` drives the loop when called from
@@ -58,12 +62,43 @@ class ControlLoop:
 
     @classmethod
     def simulated(cls, *, pose: str = "standing", actuator_order: Sequence[str] | None = None,
-                  floor_friction: float = 1.0, busy_policy: BusyPolicy = BusyPolicy.REJECT,
+                  plant: Plant | str = DEFAULT_PLANT, control_period_s: float = 1e-3,
+                  physics_timestep_s: float | None = None,
+                  busy_policy: BusyPolicy = BusyPolicy.REJECT,
                   controller: BalanceController | None = None) -> ControlLoop:
-        """A loop on a fresh MuJoCo GO2 in ``pose``, with the default whole-body controller."""
-        sim = Go2Simulator(actuator_order=actuator_order, floor_friction=floor_friction)
+        """A loop on a fresh MuJoCo GO2 in ``pose``, with the default whole-body controller.
+
+        Args:
+            pose: The pose the robot starts in.
+            actuator_order: The plant's actuator order (description order by default).
+            plant: The plant's physics: a :class:`sim.plant.Plant` or a preset name
+                (default ``menagerie``: joint damping, friction and armature the controller
+                does not know).
+            control_period_s: Control period [s] (1 ms: 1 kHz; 2 ms: the GO2's usual 500 Hz).
+            physics_timestep_s: Physics timestep [s]; a whole number of them makes a control
+                period. Default: :data:`PHYSICS_TIMESTEP_S` or the control period if shorter.
+            busy_policy: What a goal for a busy robot gets.
+            controller: The controller; by default a :class:`WholeBodyController` with this
+                control period. A given one must have the same ``control_period_s``.
+
+        Raises:
+            ConfigurationError: A control period that is not a whole number of physics steps,
+                or a controller configured for another period.
+        """
+        if physics_timestep_s is None:
+            physics_timestep_s = min(PHYSICS_TIMESTEP_S, control_period_s)
+        sim = Go2Simulator(actuator_order=actuator_order, plant=plant,
+                           timestep_s=physics_timestep_s)
+        robot = MujocoRobot(sim, control_period_s=control_period_s)
+        if controller is None:
+            controller = WholeBodyController(control_period_s=control_period_s)
+        period = getattr(getattr(controller, "config", None), "control_period_s", None)
+        if period is not None and abs(period - control_period_s) > 1e-12:
+            raise ConfigurationError(
+                f"control_period_s: the controller is configured for {period:g} s, the loop "
+                f"for {control_period_s:g} s; give both the same period")
         sim.reset(pose)
-        loop = cls(MujocoRobot(sim), controller or WholeBodyController(), busy_policy=busy_policy)
+        loop = cls(robot, controller, busy_policy=busy_policy)
         loop.sim = sim
         return loop
 
@@ -80,21 +115,23 @@ class ControlLoop:
         out = self._guard(self.controller.step(q, v), v)
         self.context.record_output(out)
         self.last_output = out
-        self.robot.write_torques(out.tau)
+        self.robot.write_command(out)
         for hook in self.hooks:
             hook(self, out)
         return out
 
     def _guard(self, out: ControlOutput, v) -> ControlOutput:
-        """Never send a non-finite torque or one beyond the effort limits: fall back."""
-        tau = out.tau
+        """Never send a command a driver should refuse (non-finite, a negative gain, a
+        feed-forward or resulting torque beyond the effort limits): fall back."""
         limit = self._effort_limit
-        if tau.shape == limit.shape and math.isfinite(tau.sum()) and np.all(np.abs(tau) <= limit):
+        problem = out.problems(limit)
+        tau = np.asarray(out.tau)
+        if not problem and not (tau.shape == limit.shape and math.isfinite(tau.sum())
+                                and np.all(np.abs(tau) <= limit)):
+            problem = "tau: non-finite or beyond the effort limits"
+        if not problem:
             return out
-        bad = np.flatnonzero(~np.isfinite(tau) | (np.abs(tau) > limit)) if tau.shape == limit.shape else []
-        return self.controller.safe_command(
-            v, f"command rejected: torques non-finite or beyond the effort limits at joints "
-               f"{[JOINT_NAMES[i] for i in bad]}")
+        return self.controller.safe_command(v, f"command rejected: {problem}")
 
     def spin_for(self, seconds: float) -> None:
         """Run for ``seconds`` of robot time."""

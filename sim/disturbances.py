@@ -1,4 +1,4 @@
-"""Disturbances for robustness runs: plant changes, sensor noise, control delay, pushes.
+"""Disturbances for robustness runs: sensor noise, control delay, pushes (plants: :mod:`sim.plant`).
 
 Everything is seeded and happens in simulated time, so a run with the same settings and
 seed is the same run.
@@ -10,61 +10,12 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
-import mujoco
 import numpy as np
 
 from actions.robot_interface import RobotInterface
+from wbc.errors import ConfigurationError
+from wbc.motor_command import MotorCommand
 from wbc.validation import as_float
-
-
-@dataclass(frozen=True)
-class PlantChanges:
-    """How the simulated robot differs from the controller's model.
-
-    Attributes:
-        floor_friction: Foot-floor friction coefficient (the controller assumes 0.6).
-        base_payload_kg: Mass added at the base's centre [kg] (unknown to the controller).
-        joint_damping: Viscous damping of every joint [N m s/rad].
-        joint_friction_loss: Dry friction of every joint [N m].
-        rotor_armature: Reflected rotor inertia added to every joint [kg m^2].
-    """
-
-    floor_friction: float = 1.0
-    base_payload_kg: float = 0.0
-    joint_damping: float = 0.0
-    joint_friction_loss: float = 0.0
-    rotor_armature: float = 0.0
-
-    def __post_init__(self) -> None:
-        as_float("floor_friction", self.floor_friction, low=0.05, high=5.0)
-        as_float("base_payload_kg", self.base_payload_kg, low=0.0, high=10.0)
-        as_float("joint_damping", self.joint_damping, low=0.0, high=10.0)
-        as_float("joint_friction_loss", self.joint_friction_loss, low=0.0, high=5.0)
-        as_float("rotor_armature", self.rotor_armature, low=0.0, high=1.0)
-
-    @classmethod
-    def menagerie_like(cls) -> PlantChanges:
-        """Joint damping, friction loss and armature of MuJoCo Menagerie's GO2 (0.1, 0.2, 0.01)."""
-        return cls(joint_damping=0.1, joint_friction_loss=0.2, rotor_armature=0.01)
-
-    def apply(self, spec: mujoco.MjSpec) -> None:
-        """Change a GO2 spec built by :func:`sim.scene.build_go2_spec` in place."""
-        for geom in spec.geoms:
-            if geom.name == "floor" or geom.name.endswith("_foot_sphere"):
-                geom.friction = [self.floor_friction, *list(geom.friction)[1:]]
-        for joint in spec.joints:
-            if joint.type == mujoco.mjtJoint.mjJNT_HINGE:
-                joint.damping = [self.joint_damping, 0.0, 0.0]  # linear term only
-                joint.frictionloss = self.joint_friction_loss
-                joint.armature = self.rotor_armature
-        if self.base_payload_kg > 0.0:
-            payload = spec.body("base").add_body(name="payload", pos=[0.0, 0.0, 0.0])
-            payload.mass = self.base_payload_kg
-            # A 20 cm x 10 cm x 5 cm box of that mass.
-            m = self.base_payload_kg
-            payload.inertia = [m * (0.1**2 + 0.05**2) / 12, m * (0.2**2 + 0.05**2) / 12,
-                               m * (0.2**2 + 0.1**2) / 12]
-            payload.explicitinertial = True
 
 
 @dataclass
@@ -94,8 +45,6 @@ class NoisyDelayedRobot:
         as_float("velocity_noise_rad_s", self.velocity_noise_rad_s, low=0.0, high=50.0)
         if isinstance(self.delay_ticks, bool) or not isinstance(self.delay_ticks, int) or not (
                 0 <= self.delay_ticks <= 100):
-            from wbc.errors import ConfigurationError
-
             raise ConfigurationError(
                 f"delay_ticks: expected a whole number in [0, 100], received {self.delay_ticks!r}")
         self._rng = np.random.default_rng(self.seed)
@@ -121,13 +70,13 @@ class NoisyDelayedRobot:
             v[6:] += self._rng.normal(0.0, self.velocity_noise_rad_s, n)
         return q, v
 
-    def write_torques(self, tau: np.ndarray) -> None:
+    def write_command(self, command: MotorCommand) -> None:
         """Queue a command; the one from ``delay_ticks`` periods ago is applied."""
-        self._queue.append(np.array(tau, dtype=float))
+        self._queue.append(command.copy())
         if len(self._queue) <= self.delay_ticks:
-            self.robot.write_torques(self._queue[0])  # the first command, until the queue fills
+            self.robot.write_command(self._queue[0])  # the first command, until the queue fills
             return
-        self.robot.write_torques(self._queue.popleft())
+        self.robot.write_command(self._queue.popleft())
 
 
 @dataclass(frozen=True)

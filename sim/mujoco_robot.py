@@ -5,6 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from sim.simulator import Go2Simulator
+from wbc.errors import ConfigurationError
+from wbc.motor_command import MotorCommand
+from wbc.validation import as_float
 
 
 class MujocoRobot:
@@ -42,6 +45,23 @@ class MujocoRobot:
         v[6:] = v[6:][self._order]
         return q, v
 
-    def write_torques(self, tau: np.ndarray) -> None:
-        """Torques [N m] in actuator order; advances one control period."""
-        self.sim.step_actuators(tau, self.substeps)
+    def write_command(self, command: MotorCommand) -> None:
+        """A motor command in actuator order; advances one control period."""
+        self.sim.step_actuator_command(command, self.substeps)
+
+
+def physics_steps_per_period(control_period_s: float, timestep_s: float) -> int:
+    """How many physics steps of ``timestep_s`` [s] make one control period [s].
+
+    Raises:
+        ConfigurationError: The period is not a whole number (at least one) of steps.
+    """
+    period = as_float("control_period_s", control_period_s, low=0.0, high=0.1,
+                      low_inclusive=False)
+    steps = round(period / timestep_s)
+    if steps < 1 or abs(steps * timestep_s - period) > 1e-9:
+        raise ConfigurationError(
+            f"control_period_s: expected a whole number of physics steps of {timestep_s:g} s "
+            f"(e.g. {timestep_s:g}, {2 * timestep_s:g}, {4 * timestep_s:g} s), received "
+            f"{period:g} s")
+    return int(steps)

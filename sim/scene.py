@@ -4,16 +4,13 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import mujoco
 
+from sim.plant import DEFAULT_PLANT, Plant
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float, check_name
-
-if TYPE_CHECKING:
-    from sim.disturbances import PlantChanges
 
 #: Collision groups: robot geoms touch the floor but not each other.
 _ROBOT_CONTYPE, _ROBOT_CONAFFINITY = 2, 1
@@ -24,30 +21,34 @@ def build_go2_spec(
     description: Go2Description | None = None,
     *,
     timestep_s: float = 1e-3,
-    floor_friction: float = 1.0,
     actuator_order: Sequence[str] | None = None,
-    plant: PlantChanges | None = None,
+    plant: Plant | str = DEFAULT_PLANT,
 ) -> mujoco.MjSpec:
     """A MuJoCo spec of the GO2 on a flat floor, ready to compile.
 
     The URDF's collision meshes are kept (its ``.dae`` visuals, which MuJoCo cannot read,
-    are dropped); each foot mesh is replaced by a sphere of radius :data:`FOOT_RADIUS_M`
-    centred on the foot frame; the base floats on a free joint; one torque motor per joint
-    has the URDF effort limit as its control range.
+    are dropped); each foot mesh is replaced by a sphere centred on the foot frame; the base
+    floats on a free joint. Each joint has a motor driver: an actuator whose force is
+    ``ctrl - kp q - kd dq`` (affine bias), clipped at the URDF effort limit, so that with
+    ``ctrl = tau_ff + kp q_des + kd dq_des`` it applies the GO2 driver law
+    ``tau_ff + kp (q_des - q) + kd (dq_des - dq)`` at every physics step (and MuJoCo's
+    implicit integrator treats its damping implicitly, as a fast driver loop would be).
 
     Args:
         description: The robot files; found from the installed example-robot-data by default.
         timestep_s: Physics timestep [s].
-        floor_friction: Sliding friction coefficient between the feet and the floor.
         actuator_order: Joint names in the order the actuators are listed (description order
             by default); another order, e.g. the Unitree SDK's, is wired by name.
-        plant: Differences from the controller's model (payload, joint damping, ...); its
-            ``floor_friction`` replaces the argument of that name.
+        plant: The physics the controller's model does not know (joint friction, contacts,
+            payload): a :class:`sim.plant.Plant` or a preset's name.
     """
     description = description or Go2Description()
     timestep_s = as_float("timestep_s", timestep_s, low=1e-5, high=0.01)
-    floor_friction = as_float("floor_friction", floor_friction, low=0.0, high=5.0,
-                              low_inclusive=False)
+    if isinstance(plant, str):
+        plant = Plant.preset(plant)
+    elif not isinstance(plant, Plant):
+        raise ConfigurationError(
+            f"plant: expected a Plant or a preset name, received {plant!r}")
     order = list(JOINT_NAMES if actuator_order is None else actuator_order)
     for name in order:
         check_name("joint", name, JOINT_NAMES)
@@ -62,9 +63,6 @@ def build_go2_spec(
     spec = mujoco.MjSpec.from_string(text)
     spec.compiler.fusestatic = False  # keep the base and the foot bodies
     spec.option.timestep = timestep_s
-    # Elliptic cones with a high impedance ratio keep the feet from creeping tangentially.
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = 10.0
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
 
     spec.body("base").add_freejoint(name="root")
@@ -81,8 +79,6 @@ def build_go2_spec(
             size=[FOOT_RADIUS_M, 0, 0],
             contype=_ROBOT_CONTYPE,
             conaffinity=_ROBOT_CONAFFINITY,
-            condim=3,
-            friction=[floor_friction, 0.005, 0.0001],
             # Stiff, well-damped contact: 5 ms time constant at critical damping.
             solref=[0.005, 1.0],
             solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
@@ -96,7 +92,6 @@ def build_go2_spec(
         size=[0, 0, 0.05],
         contype=_FLOOR_CONTYPE,
         conaffinity=_FLOOR_CONAFFINITY,
-        friction=[floor_friction, 0.005, 0.0001],
         rgba=[0.75, 0.78, 0.8, 1.0],
     )
     world.add_light(pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
@@ -107,9 +102,13 @@ def build_go2_spec(
             name=name.removesuffix("_joint"),
             target=name,
             trntype=mujoco.mjtTrn.mjTRN_JOINT,
-            ctrllimited=True,
-            ctrlrange=[-effort[name], effort[name]],
+            gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+            gainprm=[1.0] + [0.0] * 9,
+            biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+            biasprm=[0.0] * 10,  # [0, -kp, -kd], set per command
+            ctrllimited=mujoco.mjtLimited.mjLIMITED_FALSE,
+            forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+            forcerange=[-effort[name], effort[name]],
         )
-    if plant is not None:
-        plant.apply(spec)
+    plant.apply(spec)
     return spec

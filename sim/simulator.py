@@ -8,12 +8,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from sim.disturbances import PlantChanges
+from sim.plant import DEFAULT_PLANT, Plant
 from sim.scene import build_go2_spec
 from wbc.conventions import mujoco_to_pin, pin_to_mujoco
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.joint_map import JointMap
+from wbc.motor_command import MotorCommand
 from wbc.validation import as_float, as_vector, check_name
 
 
@@ -28,39 +29,40 @@ class _Push:
 class Go2Simulator:
     """A MuJoCo plant of the GO2, spoken to in the description's conventions.
 
-    Torques go in and states come out in the description's joint order and in Pinocchio's
-    conventions (see :mod:`wbc.conventions`); the plant's own actuator order may differ and is
-    wired by name.
+    Motor commands (or bare torques) go in and states come out in the description's joint
+    order and in Pinocchio's conventions (see :mod:`wbc.conventions`); the plant's own
+    actuator order may differ and is wired by name. Each joint's motor driver applies
+    ``tau_ff + kp (q_des - q) + kd (dq_des - dq)``, clipped at the effort limit, at every
+    physics step.
 
     Example:
-        >>> sim = Go2Simulator()
+        >>> sim = Go2Simulator()                     # Menagerie's joints and contacts
+        >>> sim = Go2Simulator(plant="ideal")        # frictionless joints
         >>> sim.reset("standing")
         >>> q, v = sim.state()
-        >>> sim.step(np.zeros(12))
+        >>> sim.step_command(controller.step(q, v), n_steps=2)
     """
 
     def __init__(
         self,
         *,
         timestep_s: float = 1e-3,
-        floor_friction: float = 1.0,
         actuator_order: Sequence[str] | None = None,
         description: Go2Description | None = None,
-        plant: PlantChanges | None = None,
+        plant: Plant | str = DEFAULT_PLANT,
     ):
         """Args:
             timestep_s: Physics timestep [s].
-            floor_friction: Foot-floor sliding friction coefficient.
             actuator_order: Joint names in the plant's actuator order (description order by
                 default).
             description: The robot files (found automatically by default).
-            plant: Differences from the controller's model (see
-                :class:`sim.disturbances.PlantChanges`).
+            plant: The physics the controller's model does not know: a
+                :class:`sim.plant.Plant` or a preset name (:data:`sim.plant.PLANT_PRESETS`).
         """
         self.description = description or Go2Description()
+        self.plant = Plant.preset(plant) if isinstance(plant, str) else plant
         self.spec = build_go2_spec(self.description, timestep_s=timestep_s,
-                                   floor_friction=floor_friction, actuator_order=actuator_order,
-                                   plant=plant)
+                                   actuator_order=actuator_order, plant=self.plant)
         self.model = self.spec.compile()
         self.data = mujoco.MjData(self.model)
         #: Plant actuator order <-> description order.
@@ -77,6 +79,12 @@ class Go2Simulator:
         self._floor_geom = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
         self._pushes: list[_Push] = []
         self._force6 = np.zeros(6)
+        # Actuator i drives joint ``_actuator_qpos[i]`` (qpos index) / ``_actuator_dof[i]``.
+        self._actuator_dof = self.model.jnt_dofadr[self.model.actuator_trnid[:, 0]]
+        self._actuator_qpos = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
+        self._kp = self.model.actuator_biasprm[:, 1]  # views: written in place
+        self._kd = self.model.actuator_biasprm[:, 2]
+        self.effort_limit = self.model.actuator_forcerange[:, 1].copy()  # actuator order
         self.reset("standing")
 
     @property
@@ -105,14 +113,48 @@ class Go2Simulator:
     def step(self, tau: np.ndarray, n_steps: int = 1) -> None:
         """Apply joint torques [N m] (description order) and advance ``n_steps`` timesteps.
 
-        Torques beyond the actuators' control range are clipped by MuJoCo, as a motor
-        driver saturates.
+        Pure torque control (zero driver gains); torques beyond the effort limits are
+        clipped, as a motor driver saturates.
         """
         self.step_actuators(self.actuator_map.to_other(as_vector("tau", tau, 12)), n_steps)
 
     def step_actuators(self, ctrl: np.ndarray, n_steps: int = 1) -> None:
         """Apply torques in the plant's own actuator order and advance ``n_steps`` timesteps."""
         self.data.ctrl[:] = as_vector("ctrl", ctrl, self.model.nu)
+        self._kp[:] = 0.0
+        self._kd[:] = 0.0
+        self._advance(n_steps)
+
+    def step_command(self, command: MotorCommand, n_steps: int = 1) -> None:
+        """Hand a motor command (description order) to the drivers; advance ``n_steps``.
+
+        The drivers apply ``tau_ff + kp (q_des - q) + kd (dq_des - dq)``, clipped at the
+        effort limits, at every one of the ``n_steps`` physics steps.
+        """
+        self.step_actuator_command(command.reordered(self.actuator_map.index), n_steps)
+
+    def step_actuator_command(self, command: MotorCommand, n_steps: int = 1) -> None:
+        """:meth:`step_command` with the command in the plant's own actuator order.
+
+        Raises:
+            ConfigurationError: A field of the wrong shape, non-finite, or a negative gain
+                (nothing is applied).
+        """
+        problem = command.problems(self.effort_limit)
+        if problem:
+            raise ConfigurationError(f"motor command: {problem}")
+        self.data.ctrl[:] = command.tau_ff + command.kp * command.q_des + command.kd * command.dq_des
+        # The actuator force is ctrl + biasprm . (1, q, dq): the driver's PD law.
+        np.negative(command.kp, out=self._kp)
+        np.negative(command.kd, out=self._kd)
+        self._advance(n_steps)
+
+    def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """Joint positions [rad] and velocities [rad/s] (12,), the plant's actuator order."""
+        return (self.data.qpos[self._actuator_qpos].copy(),
+                self.data.qvel[self._actuator_dof].copy())
+
+    def _advance(self, n_steps: int) -> None:
         for _ in range(n_steps):
             self._apply_pushes()
             mujoco.mj_step(self.model, self.data)

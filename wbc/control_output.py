@@ -1,4 +1,4 @@
-"""What one control tick returns: torques, accelerations, forces, errors, status, timings."""
+"""What one control tick returns: the motor command, torques, accelerations, forces, errors, status, timings."""
 
 from __future__ import annotations
 
@@ -6,6 +6,8 @@ import enum
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from wbc.motor_command import MotorCommand
 
 
 class ControlStatus(enum.Enum):
@@ -24,10 +26,16 @@ class ControlStatus(enum.Enum):
 
 
 @dataclass
-class ControlOutput:
-    """The result of :meth:`wbc.WholeBodyController.step`. Never ``None``."""
+class ControlOutput(MotorCommand):
+    """The result of :meth:`wbc.WholeBodyController.step`. Never ``None``.
 
-    #: Joint torques [N m] (12,), description order.
+    It is a :class:`~wbc.motor_command.MotorCommand` (``q_des``, ``dq_des``, ``kp``, ``kd``,
+    ``tau_ff``, description order), the command a robot's motor drivers take, plus what
+    the tick found.
+    """
+
+    #: The torque [N m] (12,) the command gives at the measured state, clipped at the
+    #: effort limits: what a plant that takes bare torques should get.
     tau: np.ndarray
     #: Generalized accelerations (18,) [m/s^2, rad/s^2]; NaN on fallback.
     qdd: np.ndarray
@@ -46,17 +54,25 @@ class ControlOutput:
     @classmethod
     def damped_hold(cls, tau_good: np.ndarray, v: np.ndarray, *, damping: float,
                     tau_max: np.ndarray, message: str, elapsed_s: float,
-                    group: str = "") -> ControlOutput:
+                    group: str = "", q_joints: np.ndarray | None = None) -> ControlOutput:
         """The safe fallback: the last good torques with joint damping, inside the limits.
 
-        Non-finite joint velocities (a broken sensor) are taken as zero.
+        As a motor command: ``tau_ff`` the last good torques, ``kd = damping`` towards zero
+        velocity, ``kp = 0`` (``q_des`` is the last measured position, or zero, and unused).
+        Non-finite joint velocities (a broken sensor) are taken as zero in ``tau``.
         """
+        n = len(tau_good)
         v = np.asarray(v, dtype=float).reshape(-1)
-        vj = np.zeros(len(tau_good))
-        if v.shape == (len(tau_good) + 6,):
+        vj = np.zeros(n)
+        if v.shape == (n + 6,):
             vj = np.where(np.isfinite(v[6:]), v[6:], 0.0)
-        tau = np.clip(tau_good - damping * vj, -tau_max, tau_max)
-        return cls(tau=tau, qdd=np.full(len(tau_good) + 6, np.nan),
+        tau_ff = np.clip(tau_good, -tau_max, tau_max)
+        tau = np.clip(tau_ff - damping * vj, -tau_max, tau_max)
+        q_des = np.zeros(n)
+        if q_joints is not None and np.isfinite(q_joints).all():
+            q_des[:] = q_joints
+        return cls(q_des=q_des, dq_des=np.zeros(n), kp=np.zeros(n), kd=np.full(n, damping),
+                   tau_ff=tau_ff, tau=tau, qdd=np.full(n + 6, np.nan),
                    forces=np.full((4, 3), np.nan), status=ControlStatus.FALLBACK,
                    message=message, infeasible_group=group, timings={"total": elapsed_s})
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import ClassVar
 
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float
@@ -64,25 +65,70 @@ class ControllerConfig:
     joint_limit_horizon_s: float = 0.05
     #: Joint damping of the safe fallback command [N m s / rad].
     fallback_damping: float = 2.0
+    # The motor command (see wbc.JointReference): the drivers' PD around the desired joint
+    # state integrated from the QP's accelerations, on top of the QP's torques.
+    #: Position gain of the joints of a stance leg [N m/rad].
+    stance_kp: float = 40.0
+    #: Velocity gain of the joints of a stance leg [N m s/rad].
+    stance_kd: float = 2.0
+    #: Position gain of the joints of a swinging leg [N m/rad].
+    swing_kp: float = 50.0
+    #: Velocity gain of the joints of a swinging leg [N m s/rad].
+    swing_kd: float = 2.0
+    #: Bound of the desired joint positions' distance from the measured ones [rad].
+    reference_position_bound_rad: float = 0.05
+    #: Bound of the desired joint velocities' distance from the measured ones [rad/s].
+    reference_velocity_bound_rad_s: float = 1.0
+    #: Time constant [s] with which the desired joint state decays towards the measured one
+    #: (0: no decay, only the bounds).
+    reference_leak_time_s: float = 0.2
+    #: Known viscous friction of the joints (hip, thigh, calf) [N m s/rad], added to the
+    #: feed-forward torque along the desired velocity. Zero (the default) compensates none.
+    known_joint_damping: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: Known dry friction of the joints (hip, thigh, calf) [N m], added to the feed-forward
+    #: torque along the desired velocity. Zero (the default) compensates none.
+    known_joint_friction: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: Joint speed [rad/s] over which the dry-friction compensation turns from zero to full
+    #: (a tanh: no chatter at rest).
+    friction_velocity_scale_rad_s: float = 0.05
+
+    #: Fields that hold one value per joint type (hip, thigh, calf).
+    PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ("known_joint_damping", "known_joint_friction")
 
     def __post_init__(self) -> None:
         as_float("torque_limit_fraction", self.torque_limit_fraction, low=0.0, high=1.0,
                  low_inclusive=False)
         as_float("friction_coefficient", self.friction_coefficient, low=0.0, high=5.0,
                  low_inclusive=False)
+        as_float("control_period_s", self.control_period_s, low=1e-4, high=0.01)
         positive = {"control_period_s", "max_normal_force_n", "joint_limit_horizon_s",
-                    "support_omega"}
+                    "support_omega", "friction_velocity_scale_rad_s"}
         for f in fields(self):
             if f.name == "backend":
                 if not isinstance(self.backend, str) or not self.backend:
                     raise ConfigurationError(
                         f"backend: expected a backend name, received {self.backend!r}")
                 continue
+            if f.name in self.PER_JOINT_TYPE:
+                self._check_per_joint_type(f.name)
+                continue
             value = getattr(self, f.name)
             as_float(f.name, value, low=0.0, low_inclusive=f.name not in positive)
+        for name in ("stance_kp", "swing_kp"):
+            as_float(name, getattr(self, name), low=0.0, high=500.0)
+        for name in ("stance_kd", "swing_kd"):
+            as_float(name, getattr(self, name), low=0.0, high=50.0)
         if self.min_normal_force_n >= self.max_normal_force_n:
             raise ConfigurationError(
                 f"min_normal_force_n: expected less than max_normal_force_n "
                 f"({self.max_normal_force_n:g} N), received {self.min_normal_force_n:g} N"
             )
 
+    def _check_per_joint_type(self, name: str) -> None:
+        value = getattr(self, name)
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+            raise ConfigurationError(
+                f"{name}: expected three numbers (hip, thigh, calf), received {value!r}")
+        for joint_type, item in zip(("hip", "thigh", "calf"), value):
+            as_float(f"{name} ({joint_type})", item, low=0.0, high=10.0)
+        object.__setattr__(self, name, tuple(float(item) for item in value))

@@ -16,6 +16,7 @@ from wbc.control_output import ControlOutput, ControlStatus
 from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
+from wbc.motor_command_shaper import MotorCommandShaper
 from wbc.validation import as_float, as_vector, check_name
 
 _NV, _NJ = 18, 12
@@ -130,6 +131,8 @@ class PlacoController(ContactModes):
             contact.mu = cfg.friction_coefficient
             self.foot_tasks[leg], self.contacts[leg] = task, contact
         self._q: np.ndarray | None = None
+        self.motor = MotorCommandShaper(cfg, tau_max=self.tau_max,
+                                        effort_limit=self.description.effort_limit)
         self._init_contact_modes()
         self._foot_weight = dict.fromkeys(LEGS, cfg.foot_weight)
         for leg in LEGS:
@@ -164,6 +167,7 @@ class PlacoController(ContactModes):
         result = self.solver.solve(False)
         self._tau_good = (np.array(result.tau[6:]) if result.success
                           else robot.static_gravity_compensation_torques("base")[6:].copy())
+        self.motor.reference.reset(q[7:], v[6:])
 
     def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
                        acceleration: np.ndarray | None = None) -> None:
@@ -260,6 +264,7 @@ class PlacoController(ContactModes):
     def _configure_foot(self, leg: str) -> None:
         """Stance: hard zero-acceleration task with a contact; swing: soft tracking task."""
         cfg, task, contact = self.config, self.foot_tasks[leg], self.contacts[leg]
+        self.motor.set_stance(LEGS.index(leg), self._stance[leg])
         if self._stance[leg]:
             task.configure(f"{leg}_contact", "hard", 1.0)
             task.kp, task.kd = 0.0, cfg.contact_damping
@@ -309,13 +314,14 @@ class PlacoController(ContactModes):
         for i, leg in enumerate(LEGS):
             if self._stance[leg]:
                 forces[i] = np.asarray(self.contacts[leg].wrench, dtype=float).reshape(3)
-        tau = tau_full[6:]
-        self._tau_good = tau
+        tau_qp = tau_full[6:]
+        self._tau_good = tau_qp
         self._last = (tau_full, qdd, forces)
+        command = self.motor.shape(q[7:], v[6:], qdd[6:], tau_qp)
         task_errors = self._task_errors(q)
         t3 = time.perf_counter()
         return ControlOutput(
-            tau=tau, qdd=qdd, forces=forces, status=ControlStatus.OK, task_errors=task_errors,
+            **command, qdd=qdd, forces=forces, status=ControlStatus.OK, task_errors=task_errors,
             timings={"model": t1 - t0, "solve": t2 - t1, "total": t3 - t0},
         )
 
@@ -366,10 +372,11 @@ class PlacoController(ContactModes):
         """Safe command: the last good torques with joint damping, inside the limits."""
         self.failures += 1
         self._last = None
+        self.motor.reference.release()
         return ControlOutput.damped_hold(
             self._tau_good, v, damping=self.config.fallback_damping, tau_max=self.tau_max,
             message=message, elapsed_s=time.perf_counter() - t0,
-        )
+            q_joints=None if self._q is None else self._q[7:])
 
 
 def _vector_or_zero(name: str, value: np.ndarray | None) -> np.ndarray:

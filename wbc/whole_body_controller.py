@@ -18,6 +18,7 @@ from wbc.control_output import ControlOutput, ControlStatus
 from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
 from wbc.errors import ConfigurationError
+from wbc.motor_command_shaper import MotorCommandShaper
 from wbc.support_polygon import SupportPolygon
 from wbc.validation import as_vector, check_name
 
@@ -97,6 +98,8 @@ class WholeBodyController(ContactModes):
         self._q_low = self.description.position_lower
         self._q_high = self.description.position_upper
         self._v_max = self.description.velocity_limit
+        self.motor = MotorCommandShaper(cfg, tau_max=self.tau_max,
+                                        effort_limit=self.description.effort_limit)
         self._init_contact_modes()
         self._build_problem()
         self._contacts_changed()
@@ -134,6 +137,7 @@ class WholeBodyController(ContactModes):
         gravity = pin.computeGeneralizedGravity(self.model, self.data, q)
         self._tau_prev = self._static_torques(q, gravity)
         self._tau_good = self._tau_prev.copy()
+        self.motor.reference.reset(q[7:], v[6:])
         self.backend.setup(self.problem)
 
     def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
@@ -259,20 +263,21 @@ class WholeBodyController(ContactModes):
                 result, status = relaxed, ControlStatus.RELAXED
                 message += "; commanded the solution with that group relaxed"
         x = result.x
-        tau = self.problem.A[_TAU, :_S] @ x[:_S] + self.data.nle[6:]
+        tau_qp = self.problem.A[_TAU, :_S] @ x[:_S] + self.data.nle[6:]
         if status is not ControlStatus.OK:
-            np.clip(tau, -self.tau_max, self.tau_max, out=tau)
+            np.clip(tau_qp, -self.tau_max, self.tau_max, out=tau_qp)
         self._x_prev[:] = x[:_S]
         self.last_solution = x
-        self._tau_prev = tau
-        self._tau_good = tau
+        self._tau_prev = tau_qp
+        self._tau_good = tau_qp
+        command = self.motor.shape(q[7:], v[6:], x[6:_NV], tau_qp)
         errors = self._errors
         task_errors = {"com": errors[0], "base_orientation": errors[1], "posture": errors[2]}
         for leg in self._swing_legs:
             task_errors[f"{leg}_foot"] = errors[3 + _LEG_INDEX[leg]]
         t4 = time.perf_counter()
         return ControlOutput(
-            tau=tau, qdd=x[:_NV].copy(), forces=x[_F0:_S].reshape(_NC, 3).copy(),
+            **command, qdd=x[:_NV].copy(), forces=x[_F0:_S].reshape(_NC, 3).copy(),
             status=status, message=message,
             infeasible_group=group, task_errors=task_errors,
             timings={"model": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2,
@@ -346,6 +351,7 @@ class WholeBodyController(ContactModes):
             rows = slice(_CON.start + 3 * i, _CON.start + 3 * i + 3)
             fz = _F0 + 3 * i + 2
             self._stance_flags[i] = self._stance[leg]
+            self.motor.set_stance(i, self._stance[leg])
             if self._stance[leg]:
                 fmax = self._max_force[leg]
                 p.is_equality[rows] = True
@@ -431,9 +437,11 @@ class WholeBodyController(ContactModes):
         """Safe command: the last good torques with joint damping, inside the limits."""
         if not group:  # QP failures were counted where they happened
             self.failures += 1
+        self.motor.reference.release()
         out = ControlOutput.damped_hold(
             self._tau_good, v, damping=self.config.fallback_damping, tau_max=self.tau_max,
-            message=message, elapsed_s=time.perf_counter() - t0, group=group)
+            message=message, elapsed_s=time.perf_counter() - t0, group=group,
+            q_joints=None if self._q is None else self._q[7:])
         self._tau_prev = out.tau
         return out
 
