@@ -148,7 +148,7 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
     controller.reset(q)
     for _ in range(WARMUP_TICKS):
         q, v = sim.state()
-        sim.step(controller.step(q, v).tau)
+        sim.step_command(controller.step(q, v))
     episode.control_wall_s += time.perf_counter() - wall
     lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
     lift.start(sim.time_s)
@@ -161,7 +161,7 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
         phase = lift.update(sim.time_s)
         q, v = sim.state()
         out, cpu_s = _timed_step(controller, q, v)
-        sim.step(out.tau)
+        sim.step_command(out)
         episode.control_wall_s += time.perf_counter() - wall
         _record(episode, controller, out, cpu_s)
         if meter is not None:
@@ -238,7 +238,7 @@ def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
                 lift.update(sim.time_s)
             q, v = sim.state()
             out, cpu_s = _timed_step(controller, q, v)
-            sim.step(out.tau)
+            sim.step_command(out)
             times.append(out.timings["total"])
             cpu_times.append(cpu_s)
         return times, cpu_times
@@ -402,7 +402,7 @@ def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | N
         sim, controller = Go2Simulator(), factory()
         controller.reset(sim.state()[0])
         for _ in range(WARMUP_TICKS):
-            sim.step(controller.step(*sim.state()).tau)
+            sim.step_command(controller.step(*sim.state()))
         lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
         lift.start(sim.time_s)
         runs[name] = (sim, controller, lift, sim.time_s, [])
@@ -422,7 +422,7 @@ def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | N
                 q, v = sim.state()
                 out, _ = _timed_step(controller, q, v)
                 samples.append(out.timings["total"])
-                sim.step(out.tau)
+                sim.step_command(out)
     default, placo = runs[DEFAULT][4], runs[PLACO][4]
     blocks = min(len(default), len(placo)) // block_ticks
     ratios = [float(np.median(default[i * block_ticks:(i + 1) * block_ticks])

@@ -32,7 +32,7 @@ from actions import GoalStatus, HighFiveGoal
 from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG
 from benchmarks.qp_timing import machine
 from sim.cli import MetricsHook
-from sim.control_loop import ControlLoop, TickHook
+from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop, TickHook
 from sim.disturbances import NoisyDelayedRobot, Push, PushSchedule
 from sim.plant import Plant
 from sim.episode_metrics import EpisodeSummary
@@ -77,6 +77,8 @@ class PlantCase:
     delay_ticks: int = 0
     position_noise_rad: float = 0.0
     velocity_noise_rad_s: float = 0.0
+    #: Control period [s] (1 ms: 1 kHz; 2 ms: 500 Hz).
+    control_period_s: float = 1e-3
 
 
 PLANT_CASES = (
@@ -174,13 +176,14 @@ def standing_on_four_feet(loop: ControlLoop) -> bool:
 def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
               controller: BalanceController | None = None) -> ControlLoop:
     """A control loop on a fresh standing MuJoCo GO2 built with ``case``'s plant and sensors."""
-    sim = Go2Simulator(plant=case.plant)
-    robot: Any = MujocoRobot(sim)
+    period = case.control_period_s
+    sim = Go2Simulator(plant=case.plant, timestep_s=min(PHYSICS_TIMESTEP_S, period))
+    robot: Any = MujocoRobot(sim, control_period_s=period)
     if case.delay_ticks or case.position_noise_rad or case.velocity_noise_rad_s:
         robot = NoisyDelayedRobot(robot, position_noise_rad=case.position_noise_rad,
                                   velocity_noise_rad_s=case.velocity_noise_rad_s,
                                   delay_ticks=case.delay_ticks, seed=seed)
-    loop = ControlLoop(robot, controller or WholeBodyController())
+    loop = ControlLoop(robot, controller or WholeBodyController(control_period_s=period))
     loop.sim = sim
     return loop
 
@@ -188,7 +191,7 @@ def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
 def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
                   hold_s: int = HOLD_S, height_m: float = HEIGHT_M, seed: int = 0,
                   hooks: Sequence[TickHook] = (), after_s: float = AFTER_S,
-                  measure: bool = True) -> Episode:
+                  measure: bool = True, controller: BalanceController | None = None) -> Episode:
     """Stand ``SETTLE_S``, run one high five with ``pushes``, run on ``after_s``; measure it.
 
     Args:
@@ -200,8 +203,9 @@ def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
         after_s: How long [s] the loop runs on after the result.
         measure: Measure the episode with :class:`sim.episode_metrics.EpisodeMetrics`
             (tracking, sliding...; it costs about half the control's time).
+        controller: The controller (a default :class:`WholeBodyController` when ``None``).
     """
-    loop = make_loop(case, seed=seed)
+    loop = make_loop(case, seed=seed, controller=controller)
     loop.spin_for(SETTLE_S)
     start = loop.sim.time_s
     phases: list[tuple[float, str]] = []

@@ -17,7 +17,7 @@ from sim.plant import DEFAULT_PLANT, Plant
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput
-from wbc.description import Go2Description
+from wbc.description import JOINT_NAMES, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.whole_body_controller import WholeBodyController
 
@@ -124,7 +124,7 @@ class ControlLoop:
         """Never send a command a driver should refuse (non-finite, a negative gain, a
         feed-forward or resulting torque beyond the effort limits): fall back."""
         limit = self._effort_limit
-        problem = out.problems(limit)
+        problem = out.problems(limit, JOINT_NAMES)
         tau = np.asarray(out.tau)
         if not problem and not (tau.shape == limit.shape and math.isfinite(tau.sum())
                                 and np.all(np.abs(tau) <= limit)):

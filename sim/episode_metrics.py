@@ -60,6 +60,7 @@ class EpisodeMetrics:
         self.sim = sim
         self.effort_limit = np.asarray(effort_limit, dtype=float)
         self.start_s = sim.time_s
+        self._last_s = sim.time_s
         self._sliding = {leg: np.zeros(2) for leg in LEGS}
         self._ground = sim.foot_positions()
         self.tracking_errors: list[float] = []
@@ -91,7 +92,8 @@ class EpisodeMetrics:
         """
         sim = self.sim
         self.ticks += 1
-        dt = sim.timestep_s
+        dt = sim.time_s - self._last_s  # one control period, whatever the physics step
+        self._last_s = sim.time_s
         if foot_error_m is not None:
             self.tracking_errors.append(foot_error_m)
             if holding:

@@ -13,7 +13,7 @@ from wbc import LegLift, LiftPhase, WholeBodyController
 
 def settle(sim: Go2Simulator, controller: WholeBodyController, seconds: float) -> None:
     for _ in range(int(round(seconds / sim.timestep_s))):
-        sim.step(controller.step(*sim.state()).tau)
+        sim.step_command(controller.step(*sim.state()))
 
 
 def run_lift(leg: str = "FR", height_m: float = 0.40, hold_s: float = 2.0,
@@ -40,7 +40,7 @@ def run_lift(leg: str = "FR", height_m: float = 0.40, hold_s: float = 2.0,
             phases.append(phase)
         q, v = sim.state()
         out = controller.step(q, v)
-        sim.step(out.tau)
+        sim.step_command(out)
         if phase is LiftPhase.HOLDING and lift.shoulder_while_holding is None:
             lift.shoulder_while_holding = controller.shoulder_position(leg)
         tracking = phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING)

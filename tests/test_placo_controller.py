@@ -37,7 +37,7 @@ def test_stands_two_seconds_in_mujoco(standing, description):
         q, v = sim.state()
         out = controller.step(q, v)
         statuses.add(out.status)
-        sim.step(out.tau)
+        sim.step_command(out)
     q, _ = sim.state()
     assert statuses == {ControlStatus.OK}
     assert np.linalg.norm(q[:3] - q0[:3]) < 5e-3
@@ -62,7 +62,7 @@ def test_nan_state_returns_fallback_and_recovers(standing):
     assert out.message == "state: non-finite values at q[9]"
     assert np.isfinite(out.tau).all()
     assert np.all(np.abs(out.tau) <= controller.tau_max)
-    np.testing.assert_allclose(out.tau, np.clip(good.tau - 2.0 * v[6:], -controller.tau_max,
+    np.testing.assert_allclose(out.tau, np.clip(good.tau_ff - 2.0 * v[6:], -controller.tau_max,
                                                  controller.tau_max))
     wrong = controller.step(q[:7], v)
     assert wrong.status is ControlStatus.FALLBACK

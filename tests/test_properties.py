@@ -32,6 +32,7 @@ from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.joint_map import JointMap
 from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
+from wbc.motor_command import MotorCommand
 
 #: Derandomized (the same examples every run) and without an example database on disk.
 SETTINGS = settings(max_examples=50, deadline=None, derandomize=True, database=None,
@@ -219,15 +220,24 @@ def config_value_is_valid(name: str, value) -> bool:
     """The documented ranges of ControllerConfig, with the other fields at their defaults."""
     if name == "backend":
         return isinstance(value, str) and value != ""
+    if name in ControllerConfig.PER_JOINT_TYPE:  # (hip, thigh, calf), each in [0, 10]
+        return (isinstance(value, tuple) and len(value) == 3
+                and all(math.isfinite(v) and 0.0 <= v <= 10.0 for v in value))
+    if isinstance(value, tuple):
+        return False
     if isinstance(value, bool) or not isinstance(value, int | float) or beyond_float(value):
         return False
     if not math.isfinite(value):
         return False
     strictly_positive = {"control_period_s", "max_normal_force_n", "joint_limit_horizon_s",
-                         "support_omega", "torque_limit_fraction", "friction_coefficient"}
+                         "support_omega", "torque_limit_fraction", "friction_coefficient",
+                         "friction_velocity_scale_rad_s"}
     if value < 0.0 or (value == 0.0 and name in strictly_positive):
         return False
     return {"torque_limit_fraction": value <= 1.0, "friction_coefficient": value <= 5.0,
+            "control_period_s": 1e-4 <= value <= 0.01,
+            "stance_kp": value <= 500.0, "swing_kp": value <= 500.0,
+            "stance_kd": value <= 50.0, "swing_kd": value <= 50.0,
             "min_normal_force_n": value < _DEFAULTS.max_normal_force_n,
             "max_normal_force_n": value > _DEFAULTS.min_normal_force_n}.get(name, True)
 
@@ -235,7 +245,8 @@ def config_value_is_valid(name: str, value) -> bool:
 @SETTINGS
 @given(name=st.sampled_from(CONFIG_FIELDS),
        value=st.one_of(numbers, st.booleans(), st.none(), st.text(max_size=5),
-                       st.floats(0.0, 1.0), st.floats(0.0, 1e3)))
+                       st.floats(0.0, 1.0), st.floats(0.0, 1e3),
+                       st.tuples(st.floats(-1.0, 12.0), st.floats(0.0, 1.0), st.floats(0.0, 2.0))))
 def test_controller_config_field_is_valid_or_a_configuration_error_naming_it(name, value):
     try:
         config = ControllerConfig(**{name: value})
@@ -454,11 +465,12 @@ def test_a_plant_in_any_actuator_order_is_seen_in_the_description_order(order, t
     q_sim, v_sim = sim.state()
     np.testing.assert_array_equal(q, q_sim)
     np.testing.assert_array_equal(v, v_sim)
-    robot.write_torques(np.array(tau))  # one step with these torques
+    robot.write_command(MotorCommand.pure_torque(np.array(tau)))  # one step with these torques
     for i in range(sim.model.nu):
         joint = sim.model.joint(sim.model.actuator_trnid[i, 0]).name
         assert sim.model.actuator(i).name == joint.removesuffix("_joint")
         assert sim.data.ctrl[i] == pytest.approx(tau[JOINT_NAMES.index(joint)])
+        assert sim.data.actuator_force[i] == pytest.approx(tau[JOINT_NAMES.index(joint)])
 
 
 # ---------------------------------------------------------------------------- huge integers

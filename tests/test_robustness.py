@@ -13,6 +13,7 @@ from actions.action_runner import ActionRunner
 from actions.messages import StandGoal
 from benchmarks import robustness
 from benchmarks.robustness import (
+    DIRECTIONS_DEG,
     HOLD_START_S,
     PLANT_CASES,
     PUSH_INTO_HOLD_S,
@@ -86,19 +87,22 @@ def test_small_push_during_the_hold_is_absorbed_without_stepping(direction_deg):
     assert_one_result_per_accepted_goal(episode.loop.runner)
 
 
-@pytest.mark.parametrize("direction_deg", [300, 270])
-def test_strong_push_puts_the_foot_down_and_aborts_standing(direction_deg):
+@pytest.mark.parametrize("direction_deg", DIRECTIONS_DEG)
+def test_strong_push_in_any_direction_ends_with_no_fall(direction_deg):
+    """8 N s during the hold: absorbed, or the foot goes down at once; never a fall."""
     push = hold_push(direction_deg, 8.0)
     episode = run_high_five(pushes=[push], after_s=1.0, measure=False)
-    assert episode.status is GoalStatus.ABORTED, episode.message
-    assert episode.message.startswith("aborted: balance was being lost (")
-    assert episode.message.endswith("the foot was put down and the robot is back on four feet")
-    phases = [p for _, p in episode.phases]
-    assert phases[:4] == PHASES[:4] and phases[-1] == "aborted" and "lowering" in phases
-    lowering, _ = phase_window(episode, "lowering")
-    assert push.at_s < lowering < push.at_s + 0.2  # the foot goes down at once
-    assert episode.min_height_m > 0.2
+    assert not episode.fell and episode.min_height_m > 0.2
     assert episode.standing and episode.final_tilt_deg < 1.0
+    assert episode.status in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED), episode.message
+    if episode.status is GoalStatus.ABORTED:
+        assert episode.message.startswith("aborted: balance was being lost (")
+        assert episode.message.endswith(
+            "the foot was put down and the robot is back on four feet")
+        phases = [p for _, p in episode.phases]
+        assert phases[:4] == PHASES[:4] and phases[-1] == "aborted" and "lowering" in phases
+        lowering, _ = phase_window(episode, "lowering")
+        assert push.at_s < lowering < push.at_s + 0.2  # the foot goes down at once
     assert_one_result_per_accepted_goal(episode.loop.runner)
 
 
@@ -213,8 +217,8 @@ def torque_beyond_limits(loop: ControlLoop, ticks: int) -> None:
 
     def wild(q, v):
         out = step(q, v)
-        out.tau = out.tau.copy()
-        out.tau[4] = 1e3
+        out.tau_ff = out.tau_ff.copy()
+        out.tau_ff[4] = 1e3
         return out
 
     loop.controller.step = wild
@@ -232,8 +236,7 @@ FAULTS = {
                          "state: non-finite values at q[11]"),
     "torque beyond the limits": (
         torque_beyond_limits, 1, {ControlStatus.FALLBACK},
-        ("command rejected: torques non-finite or beyond the effort limits at joints "
-         "['FR_thigh_joint']")),
+        "command rejected: tau_ff: beyond the effort limits at joints ['FR_thigh_joint']"),
 }
 
 

@@ -9,7 +9,9 @@ from sim.simulator import Go2Simulator
 from tests.conftest import random_configuration
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
 from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.joint_map import JointMap
 from wbc.joint_pd_controller import JointPdController
+from wbc.motor_command import MotorCommand
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +21,7 @@ def sim():
 
 def test_mass_and_limits_agree(sim, description):
     assert sim.model.body_mass.sum() == pytest.approx(description.total_mass, rel=0.01)
-    np.testing.assert_allclose(sim.model.actuator_ctrlrange[:, 1], description.effort_limit)
+    np.testing.assert_allclose(sim.model.actuator_forcerange[:, 1], description.effort_limit)
     np.testing.assert_allclose(sim.model.jnt_range[1:, 0], description.position_lower)
     assert sim.timestep_s == 1e-3
 
@@ -103,3 +105,40 @@ def test_bad_input(sim):
         sim.reset("crouch")
     with pytest.raises(ConfigurationError, match="actuator_order: expected each of the 12"):
         Go2Simulator(actuator_order=JOINT_NAMES[:11] + ("FL_hip_joint",))
+
+
+def test_drivers_apply_the_pd_law_at_every_physics_step(description):
+    """0.5 ms physics under a 2 ms command: the torque follows the state within the period."""
+    sim = Go2Simulator(timestep_s=5e-4, actuator_order=UNITREE_SDK_JOINT_NAMES)
+    rng = np.random.default_rng(8)
+    q0 = sim.state()[0][7:]
+    command = MotorCommand(q_des=q0 + rng.uniform(-0.05, 0.05, 12), dq_des=rng.normal(size=12),
+                           kp=rng.uniform(20, 60, 12), kd=rng.uniform(1, 3, 12),
+                           tau_ff=rng.uniform(-3, 3, 12))
+    torques = []
+    for _ in range(4):  # one 2 ms command, checked at each of its four physics steps
+        q, v = sim.state()
+        expected = command.clipped_torque_at(q[7:], v[6:], description.effort_limit)
+        sim.step_command(command)
+        applied = JointMap(UNITREE_SDK_JOINT_NAMES).from_other(sim.data.actuator_force)
+        np.testing.assert_allclose(applied, expected, rtol=1e-9, atol=1e-9)
+        torques.append(applied)
+    assert np.abs(torques[3] - torques[0]).max() > 1e-3  # the PD acted within the period
+
+
+def test_drivers_clip_at_the_effort_limits(description):
+    sim = Go2Simulator()
+    q = sim.state()[0][7:]
+    command = MotorCommand(q_des=q + 1.0, dq_des=np.zeros(12), kp=np.full(12, 500.0),
+                           kd=np.zeros(12), tau_ff=np.zeros(12))
+    sim.step_command(command)
+    np.testing.assert_allclose(sim.data.actuator_force, description.effort_limit)
+
+
+def test_a_bad_motor_command_is_refused_whole(sim):
+    before = sim.time_s
+    command = MotorCommand.pure_torque(np.zeros(12))
+    command.kp[2] = -5.0
+    with pytest.raises(ConfigurationError, match=r"motor command: kp: negative gain at joints \[2\]"):
+        sim.step_command(command)
+    assert sim.time_s == before

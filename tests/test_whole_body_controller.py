@@ -44,7 +44,7 @@ def check_solution(c, q, v, out, swing=()):
     # Full inverse dynamics: M qdd + h - J^T f = [0 (base); tau (joints)].
     generalized = pin.rnea(model, data, q, v, qdd) - contact_jac.T @ forces.reshape(-1)
     np.testing.assert_allclose(generalized[:6], 0.0, atol=1e-6)
-    np.testing.assert_allclose(generalized[6:], out.tau, atol=1e-6)
+    np.testing.assert_allclose(generalized[6:], out.tau_ff, atol=1e-6)  # no friction model
     mu = c.config.friction_coefficient
     for i, leg in enumerate(LEGS):
         f = forces[i]
@@ -56,7 +56,7 @@ def check_solution(c, q, v, out, swing=()):
         np.testing.assert_allclose(acc, -c.config.contact_damping * contact_jac[rows] @ v, atol=1e-6)
         assert abs(f[0]) <= mu * f[2] + 1e-7 and abs(f[1]) <= mu * f[2] + 1e-7
         assert c.config.min_normal_force_n - 1e-7 <= f[2] <= c.max_normal_force(leg) + 1e-7
-    assert np.all(np.abs(out.tau) <= c.tau_max + 1e-6)
+    assert np.all(np.abs(out.tau_ff) <= c.tau_max + 1e-6)
 
 
 def test_one_line_construction_and_defaults():
@@ -100,7 +100,8 @@ def test_non_finite_state_falls_back_and_recovers(controller, standing):
     assert out.status is ControlStatus.FALLBACK
     assert out.message == "state: non-finite values at v[7]"
     assert np.all(np.isfinite(out.tau)) and np.all(np.abs(out.tau) <= controller.tau_max)
-    np.testing.assert_allclose(out.tau, good.tau, atol=1e-9)  # damping of finite v only
+    np.testing.assert_allclose(out.tau, good.tau_ff, atol=1e-9)  # damping of finite v only
+    assert (out.kp == 0).all() and (out.kd == controller.config.fallback_damping).all()
     assert controller.step(standing, np.zeros(18)).ok
 
 
@@ -180,6 +181,6 @@ def test_backends_agree_with_daqp(backend, standing, model):
     for q, v in perturbed_states(model, standing, 3, seed=2):
         a, b = reference.step(q, v), other.step(q, v)
         assert a.ok and b.ok, b.message
-        np.testing.assert_allclose(b.tau, a.tau, atol=1e-3)
+        np.testing.assert_allclose(b.tau_ff, a.tau_ff, atol=1e-3)
         eq, ineq = other.problem.violations(other.last_solution)
         assert eq < 1e-5 and ineq < 1e-5

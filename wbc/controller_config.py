@@ -33,9 +33,11 @@ class ControllerConfig:
     com_weight: float = 20.0
     base_orientation_kp: float = 150.0
     base_orientation_weight: float = 10.0
-    #: Integral gain of the base orientation [1/s^3]: pulls the base level against joint
-    #: friction the model does not know (0 disables).
-    base_orientation_ki: float = 1000.0
+    #: Integral gain of the base orientation [1/s^3], on four loaded feet: pulls the base
+    #: level against joint friction the model does not know. Off (0) by default: the motor
+    #: command's joint PD does that job, and with it the integral made the joints hunt
+    #: (stick-slip at 0.01 to 0.08 rad/s) on dry friction.
+    base_orientation_ki: float = 0.0
     #: Bound of each component of the orientation error's integral [rad s] (anti-windup).
     base_orientation_integral_limit: float = 0.02
     foot_kp: float = 900.0

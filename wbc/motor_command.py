@@ -63,12 +63,17 @@ class MotorCommand:
         """A command with its own arrays."""
         return self.reordered(np.arange(len(self.tau_ff)))
 
-    def problems(self, effort_limit: np.ndarray) -> str:
+    def problems(self, effort_limit: np.ndarray, names: tuple[str, ...] | None = None) -> str:
         """Why a driver should refuse this command ('' when it is fine).
 
         Refused: a wrong shape, a non-finite value, a negative gain, or a feed-forward
-        torque beyond ``effort_limit`` [N m].
+        torque beyond ``effort_limit`` [N m]. Joints are named by ``names`` when given, else
+        by index.
         """
+        def joints(mask: np.ndarray) -> list:
+            found = np.flatnonzero(mask).tolist()
+            return [names[i] for i in found] if names is not None else found
+
         n = len(effort_limit)
         fields = {"q_des": self.q_des, "dq_des": self.dq_des, "kp": self.kp, "kd": self.kd,
                   "tau_ff": self.tau_ff}
@@ -77,12 +82,11 @@ class MotorCommand:
             if values.shape != (n,):
                 return f"{name}: expected shape ({n},), received {values.shape}"
             if not np.isfinite(values).all():
-                return f"{name}: non-finite at joints {np.flatnonzero(~np.isfinite(values)).tolist()}"
+                return f"{name}: non-finite at joints {joints(~np.isfinite(values))}"
         for name in ("kp", "kd"):
-            bad = np.flatnonzero(fields[name] < 0.0)
-            if len(bad):
-                return f"{name}: negative gain at joints {bad.tolist()}"
-        bad = np.flatnonzero(np.abs(self.tau_ff) > effort_limit)
-        if len(bad):
-            return f"tau_ff: beyond the effort limits at joints {bad.tolist()}"
+            if (fields[name] < 0.0).any():
+                return f"{name}: negative gain at joints {joints(fields[name] < 0.0)}"
+        beyond = np.abs(self.tau_ff) > effort_limit
+        if beyond.any():
+            return f"tau_ff: beyond the effort limits at joints {joints(beyond)}"
         return ""

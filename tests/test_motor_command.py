@@ -1,0 +1,64 @@
+"""The motor command: the driver law, reordering by name, and what a driver refuses."""
+
+import numpy as np
+import pytest
+
+from wbc.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
+from wbc.joint_map import JointMap
+from wbc.motor_command import MotorCommand
+
+
+def random_command(rng: np.random.Generator) -> MotorCommand:
+    return MotorCommand(q_des=rng.normal(size=12), dq_des=rng.normal(size=12),
+                        kp=rng.uniform(0, 60, 12), kd=rng.uniform(0, 3, 12),
+                        tau_ff=rng.uniform(-10, 10, 12))
+
+
+def test_torque_is_the_driver_law():
+    rng = np.random.default_rng(3)
+    cmd = random_command(rng)
+    q, dq = rng.normal(size=12), rng.normal(size=12)
+    expected = [cmd.tau_ff[i] + cmd.kp[i] * (cmd.q_des[i] - q[i]) + cmd.kd[i] * (cmd.dq_des[i] - dq[i])
+                for i in range(12)]
+    np.testing.assert_allclose(cmd.torque_at(q, dq), expected, rtol=1e-12)
+    limit = np.full(12, 2.0)
+    np.testing.assert_allclose(cmd.clipped_torque_at(q, dq, limit), np.clip(expected, -2.0, 2.0))
+
+
+def test_pure_torque_ignores_the_state():
+    tau = np.arange(12.0)
+    cmd = MotorCommand.pure_torque(tau)
+    np.testing.assert_array_equal(cmd.torque_at(np.ones(12), -np.ones(12)), tau)
+    tau[0] = 99.0  # the command owns its arrays
+    assert cmd.tau_ff[0] == 0.0
+
+
+def test_reordered_to_the_sdk_order_by_name():
+    rng = np.random.default_rng(4)
+    cmd = random_command(rng)
+    sdk = cmd.reordered(JointMap.unitree_sdk().index)
+    for i, name in enumerate(UNITREE_SDK_JOINT_NAMES):
+        j = JOINT_NAMES.index(name)
+        assert (sdk.q_des[i], sdk.dq_des[i], sdk.kp[i], sdk.kd[i], sdk.tau_ff[i]) == (
+            cmd.q_des[j], cmd.dq_des[j], cmd.kp[j], cmd.kd[j], cmd.tau_ff[j])
+    back = sdk.reordered(JointMap.unitree_sdk().inverse)
+    np.testing.assert_array_equal(back.tau_ff, cmd.tau_ff)
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("kp", -1.0, "kp: negative gain at joints [3]"),
+    ("kd", -0.5, "kd: negative gain at joints [3]"),
+    ("q_des", np.nan, "q_des: non-finite at joints [3]"),
+    ("tau_ff", 100.0, "tau_ff: beyond the effort limits at joints [3]"),
+])
+def test_problems_name_the_field_and_joints(field, value, message):
+    cmd = random_command(np.random.default_rng(5))
+    getattr(cmd, field)[3] = value
+    assert cmd.problems(np.full(12, 23.7)) == message
+
+
+def test_problems_of_a_good_command_and_a_wrong_shape():
+    cmd = random_command(np.random.default_rng(6))
+    assert cmd.problems(np.full(12, 23.7)) == ""
+    cmd.kd = np.zeros(3)
+    assert cmd.problems(np.full(12, 23.7)) == "kd: expected shape (12,), received (3,)"

@@ -1,0 +1,78 @@
+"""From a solved tick to the drivers' command: per-leg gains, friction feed-forward, tau."""
+
+import numpy as np
+import pytest
+
+from wbc import WholeBodyController
+from wbc.controller_config import ControllerConfig
+from wbc.description import JOINT_NAMES, Go2Description
+from wbc.errors import ConfigurationError
+from wbc.motor_command_shaper import MotorCommandShaper
+
+
+def shaper(**overrides) -> MotorCommandShaper:
+    effort = Go2Description().effort_limit
+    return MotorCommandShaper(ControllerConfig(**overrides), tau_max=0.9 * effort,
+                              effort_limit=effort)
+
+
+def test_stance_and_swing_gains_per_leg():
+    s = shaper(stance_kp=40.0, stance_kd=2.0, swing_kp=55.0, swing_kd=2.5)
+    s.set_stance(1, False)  # FR
+    for i, name in enumerate(JOINT_NAMES):
+        swing = name.startswith("FR")
+        assert s.kp[i] == (55.0 if swing else 40.0) and s.kd[i] == (2.5 if swing else 2.0)
+
+
+def test_command_is_the_qp_torque_plus_the_pd_at_the_measured_state():
+    s = shaper()
+    rng = np.random.default_rng(1)
+    q, dq = rng.normal(size=12), rng.normal(size=12)
+    s.reference.reset(q, dq)
+    tau_qp = rng.uniform(-5, 5, 12)
+    out = s.shape(q, dq, rng.normal(size=12), tau_qp)
+    np.testing.assert_array_equal(out["tau_ff"], tau_qp)  # no friction known
+    expected = tau_qp + out["kp"] * (out["q_des"] - q) + out["kd"] * (out["dq_des"] - dq)
+    np.testing.assert_allclose(out["tau"], expected)
+
+
+def test_known_friction_is_fed_forward_along_the_desired_velocity():
+    s = shaper(known_joint_damping=(0.1, 0.2, 0.3), known_joint_friction=(0.25, 0.2, 1.0),
+               friction_velocity_scale_rad_s=0.05)
+    q, dq = np.zeros(12), np.zeros(12)
+    s.reference.reset(q, np.full(12, 1.0))  # moving at 1 rad/s, far above the scale
+    out = s.shape(q, np.full(12, 1.0), np.zeros(12), np.zeros(12))
+    dq_des = out["dq_des"]
+    damping = np.tile([0.1, 0.2, 0.3], 4)
+    friction = np.tile([0.25, 0.2, 1.0], 4)
+    np.testing.assert_allclose(out["tau_ff"], damping * dq_des + friction * np.tanh(dq_des / 0.05))
+    np.testing.assert_allclose(out["tau_ff"], damping + friction, rtol=1e-6)
+
+
+def test_controller_output_is_a_motor_command_with_swing_gains_on_a_raised_leg(description):
+    standing = description.pose("standing")
+    controller = WholeBodyController()
+    controller.reset(standing)
+    out = controller.step(standing, np.zeros(18))
+    assert out.ok and (out.kp == controller.config.stance_kp).all()
+    np.testing.assert_allclose(out.tau, out.clipped_torque_at(
+        standing[7:], np.zeros(12), controller.description.effort_limit))
+    controller.set_max_normal_force("FR", 0.0)
+    controller.set_swing("FR")
+    out = controller.step(standing, np.zeros(18))
+    fr = [i for i, name in enumerate(JOINT_NAMES) if name.startswith("FR")]
+    assert (out.kp[fr] == controller.config.swing_kp).all()
+    assert (out.kd[fr] == controller.config.swing_kd).all()
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("stance_kp", -1.0, r"stance_kp: expected a value in \[0, inf\], received -1"),
+    ("swing_kd", 80.0, r"swing_kd: expected a value in \[0, 50\], received 80"),
+    ("known_joint_friction", (0.2, -0.1, 1.0),
+     r"known_joint_friction \(thigh\): expected a value in \[0, 10\], received -0.1"),
+    ("known_joint_damping", 0.2,
+     r"known_joint_damping: expected three numbers \(hip, thigh, calf\), received 0.2"),
+])
+def test_gains_and_known_friction_are_validated(field, value, message):
+    with pytest.raises(ConfigurationError, match=message):
+        ControllerConfig(**{field: value})

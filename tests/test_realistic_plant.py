@@ -1,0 +1,90 @@
+"""Closed loop on plants that are not the model: joint damping, dry friction, rotor inertia.
+
+The controller's model has frictionless joints; the plants here have Menagerie's joints (the
+default), the joints identified on a real GO2, and, for comparison, none. Bounds are those
+the motor command (drivers' PD around the integrated plan) must meet on them.
+"""
+
+import numpy as np
+import pytest
+
+from actions import GoalStatus, HighFiveGoal
+from actions.messages import SitGoal, StandGoal
+from benchmarks.robustness import PlantCase, run_high_five
+from sim.control_loop import ControlLoop
+from sim.plant import Plant
+from wbc import WholeBodyController
+from wbc.description import LEGS
+
+PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading", "shifting_back",
+          "complete"]
+
+
+def high_five(plant: str, control_period_s: float = 1e-3):
+    return run_high_five(PlantCase(plant, Plant.preset(plant), control_period_s=control_period_s),
+                         hold_s=2, height_m=0.40)
+
+
+@pytest.fixture(scope="module", params=[("menagerie", 1e-3), ("menagerie", 2e-3),
+                                        ("identified", 1e-3)],
+                ids=["menagerie-1kHz", "menagerie-500Hz", "identified-1kHz"])
+def episode(request):
+    return high_five(*request.param)
+
+
+def test_high_five_succeeds_through_every_phase(episode):
+    assert episode.status is GoalStatus.SUCCEEDED, episode.message
+    assert [phase for _, phase in episode.phases] == PHASES
+    assert episode.standing and not episode.fell
+
+
+def test_high_five_tracking_sliding_and_tilt(episode):
+    s = episode.summary
+    assert s.qp_failures == 0
+    assert s.raised_foot_rms_mm <= 5.0
+    assert s.holding_rms_mm <= 3.0
+    assert s.stance_sliding_max_mm <= 2.0
+    assert episode.max_tilt_deg <= 3.0
+    assert episode.final_tilt_deg <= 0.5
+    assert s.min_stance_normal_force_n >= 5.0
+    assert s.max_torque_fraction <= 1.0
+
+
+def test_pure_torque_control_loses_balance_on_menagerie_joints():
+    """Why the motor command: the same controller with zero driver gains (bare torques)."""
+    bare_torques = WholeBodyController(stance_kp=0.0, stance_kd=0.0, swing_kp=0.0, swing_kd=0.0)
+    episode = run_high_five(PlantCase(), hold_s=2, height_m=0.40, controller=bare_torques)
+    assert episode.status is GoalStatus.ABORTED
+    assert episode.max_tilt_deg > 10.0  # the balance watch put the foot down
+    assert not episode.fell
+
+
+@pytest.mark.parametrize("plant", ["menagerie", "identified"])
+def test_stands_up_from_lying_and_sits(plant):
+    loop = ControlLoop.simulated(pose="lying", plant=plant)
+    stand = loop.client("stand").send_goal_and_wait(StandGoal(duration_s=2.0), timeout=10.0)
+    assert stand.status is GoalStatus.SUCCEEDED, stand.result.message
+    loop.spin_for(0.5)
+    assert loop.context.is_standing() and loop.context.tilt_deg() < 1.0
+    forces = loop.sim.foot_contact_forces()
+    assert all(forces[leg][2] > 20.0 for leg in LEGS)
+    sit = loop.client("sit").send_goal_and_wait(SitGoal(duration_s=2.0), timeout=10.0)
+    assert sit.status is GoalStatus.SUCCEEDED, sit.result.message
+    loop.spin_for(0.5)
+    q = loop.context.q
+    np.testing.assert_allclose(q[7:], loop.controller.description.pose("lying")[7:], atol=0.1)
+    assert loop.controller.failures == 0
+
+
+def test_known_friction_compensation_on_the_identified_plant():
+    """Given the identified friction, the high five tracks at least as well as without it."""
+    plant = Plant.preset("identified").with_params(calf_friction_loss=1.4)
+    blind = run_high_five(PlantCase("calf 1.4", plant), hold_s=2, height_m=0.40)
+    informed = run_high_five(
+        PlantCase("calf 1.4", plant), hold_s=2, height_m=0.40,
+        controller=WholeBodyController(known_joint_damping=(0.2, 0.2, 0.2),
+                                       known_joint_friction=(0.25, 0.2, 1.4)))
+    for episode in (blind, informed):
+        assert episode.status is GoalStatus.SUCCEEDED, episode.message
+        assert episode.max_tilt_deg <= 3.0
+    assert informed.summary.raised_foot_rms_mm <= blind.summary.raised_foot_rms_mm + 0.2
