@@ -81,9 +81,12 @@ class ControllerConfig:
     reference_position_bound_rad: float = 0.05
     #: Bound of the desired joint velocities' distance from the measured ones [rad/s].
     reference_velocity_bound_rad_s: float = 1.0
-    #: Time constant [s] with which the desired joint state decays towards the measured one
-    #: (0: no decay, only the bounds).
-    reference_leak_time_s: float = 0.2
+    #: Time constant [s] with which a stance leg's desired joint state decays towards the
+    #: measured one (0: no decay, only the bounds). Short: three or four legs closed through
+    #: the floor must not keep a disagreement (it would push the feet apart and make them slide).
+    stance_leak_time_s: float = 0.2
+    #: The same for a swinging leg [s]: long, so the PD keeps up with a lagging joint.
+    swing_leak_time_s: float = 0.5
     #: Known viscous friction of the joints (hip, thigh, calf) [N m s/rad], added to the
     #: feed-forward torque along the desired velocity. Zero (the default) compensates none.
     known_joint_damping: tuple[float, float, float] = (0.0, 0.0, 0.0)

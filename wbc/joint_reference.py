@@ -41,9 +41,14 @@ class JointReference:
         self.q_des = np.zeros(n)
         #: Desired joint velocities [rad/s].
         self.dq_des = np.zeros(n)
-        self.leak_time_s = as_float("leak_time_s", leak_time_s, low=0.0)
+        self._leak_time = np.full(n, as_float("leak_time_s", leak_time_s, low=0.0))
         self._anchored = False
         self._offset = np.zeros(n)
+
+    def set_leak_time(self, joints: slice, leak_time_s: float) -> None:
+        """Time constant [s] with which these joints' desired state decays towards the
+        measured one (0: no decay, only the bounds)."""
+        self._leak_time[joints] = as_float("leak_time_s", leak_time_s, low=0.0)
 
     def reset(self, q: np.ndarray, dq: np.ndarray) -> None:
         """Start from the measured joint state [rad], [rad/s]."""
@@ -70,8 +75,9 @@ class JointReference:
         if not self._anchored:
             self.reset(q, dq)
         q_des, dq_des, offset = self.q_des, self.dq_des, self._offset
-        if self.leak_time_s:
-            keep = max(0.0, 1.0 - dt / self.leak_time_s)
+        if self._leak_time.any():
+            keep = np.where(self._leak_time > 0.0,
+                            np.maximum(0.0, 1.0 - dt / np.maximum(self._leak_time, 1e-12)), 1.0)
             q_des -= q
             q_des *= keep
             q_des += q

@@ -36,7 +36,7 @@ class MotorCommandShaper:
         self.reference = JointReference(
             _NJ, max_position_error_rad=config.reference_position_bound_rad,
             max_velocity_error_rad_s=config.reference_velocity_bound_rad_s,
-            leak_time_s=config.reference_leak_time_s)
+            leak_time_s=config.stance_leak_time_s)
         self.tau_max = tau_max
         self.effort_limit = effort_limit
         self._damping = np.asarray(config.known_joint_damping)[_JOINT_TYPE]
@@ -51,6 +51,8 @@ class MotorCommandShaper:
         joints = slice(3 * leg_index, 3 * leg_index + 3)
         self.kp[joints] = cfg.stance_kp if stance else cfg.swing_kp
         self.kd[joints] = cfg.stance_kd if stance else cfg.swing_kd
+        self.reference.set_leak_time(
+            joints, cfg.stance_leak_time_s if stance else cfg.swing_leak_time_s)
 
     def shape(self, q: np.ndarray, dq: np.ndarray, qdd: np.ndarray,
               tau_qp: np.ndarray) -> dict[str, np.ndarray]:
