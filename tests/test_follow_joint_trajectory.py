@@ -357,8 +357,8 @@ def test_a_fast_motion_with_a_tight_path_tolerance_aborts_and_holds():
 
 def test_a_goal_tolerance_not_met_in_the_goal_time_aborts():
     loop = ControlLoop.simulated()
-    # 1 urad, 20 ms after a 0.3 s move: no controller settles that close that fast.
-    request = goal(["FR_calf_joint"], point([-1.9], 0.3), goal_time_tolerance=0.02,
+    # 1 urad, 20 ms after a 1 s move: no controller settles that close that fast.
+    request = goal(["FR_calf_joint"], point([-1.9], 1.0), goal_time_tolerance=0.02,
                    goal_tolerance=[JointTolerance(name="FR_calf_joint", position=1e-6)])
     feedback = []
     wrapped = loop.client(FOLLOW_JOINT_TRAJECTORY_ACTION).send_goal_and_wait(

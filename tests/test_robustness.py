@@ -122,7 +122,9 @@ def test_hand_pushing_the_raised_foot_back_is_tolerated():
     during, settled = errors_mm(push.at_s, release), errors_mm(release + 0.3, end)
     print(f"FR foot pushed: error up to {max(during):.1f} mm; from 0.3 s after release: "
           f"up to {max(settled):.2f} mm")
-    assert max(during) > 10.0  # the hand did move the foot
+    # The hand did move the foot: 2.8 mm, measured, against the swinging leg's joint PD
+    # (24 mm with bare torques).
+    assert max(during) > 1.0
     assert max(settled) < 5.0
     assert episode.min_height_m > 0.3 and episode.standing
     assert_one_result_per_accepted_goal(episode.loop.runner)
@@ -231,7 +233,7 @@ FAULTS = {
     "solver failure": (solver_failure, 10, {ControlStatus.RESOLVED},
                        f"QP failed: {INJECTED}; the problem is feasible: commanded a fresh DAQP"),
     "infeasible QP": (infeasible_qp, 10, {ControlStatus.RELAXED},
-                      "QP failed: DAQP: infeasible; infeasible constraint group: torque limits"),
+                      "infeasible constraint group: torque limits"),
     "NaN in the state": (nan_state, 1, {ControlStatus.FALLBACK},
                          "state: non-finite values at q[11]"),
     "torque beyond the limits": (
@@ -285,7 +287,8 @@ def test_fault_during_the_hold_aborts_safely_and_the_robot_recovers(fault, faili
     assert message in faulty[0][2]
     result = run_until_done(loop, goal.result().get_result_async())
     assert result.status is GoalStatus.ABORTED, result.result.message
-    assert result.result.message.startswith(f"aborted: controller fault ({message}")
+    assert result.result.message.startswith("aborted: controller fault (")
+    assert message in result.result.message
     assert result.result.message.endswith("the robot is back on four feet")
     assert standing_on_four_feet(loop)
     speed, travel = still_after(loop, 1.0)
@@ -314,7 +317,7 @@ def test_long_sensor_dropout_ends_the_goal_at_once_and_stand_puts_the_foot_down(
         "raised foot down afterwards")
     # The controller took over again when the state came back: on three feet, foot up, still.
     assert loop.controller.stance_legs == ["FL", "RL", "RR"]
-    speed, travel = still_after(loop, 1.0)
+    speed, travel = still_after(loop, 2.0)
     assert speed < 0.01 and travel < 1e-3, (speed, travel)
     assert loop.sim.foot_positions()["FR"][2] > 0.3 and loop.context.tilt_deg() < 2.0
     stand = loop.client("stand").send_goal_and_wait(StandGoal(duration_s=1.0), timeout=5.0)
