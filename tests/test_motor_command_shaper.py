@@ -39,7 +39,7 @@ def test_command_is_the_qp_torque_plus_the_pd_at_the_measured_state():
 def test_known_friction_is_fed_forward_along_the_desired_velocity():
     s = shaper(known_joint_damping=(0.1, 0.2, 0.3), known_joint_friction=(0.25, 0.2, 1.0),
                friction_velocity_scale_rad_s=0.05)
-    q, dq = np.zeros(12), np.zeros(12)
+    q = np.zeros(12)
     s.reference.reset(q, np.full(12, 1.0))  # moving at 1 rad/s, far above the scale
     out = s.shape(q, np.full(12, 1.0), np.zeros(12), np.zeros(12))
     dq_des = out["dq_des"]

@@ -4,7 +4,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from tasks import ComTask, ContactTask, FramePositionTask, PostureTask
+from tasks import ContactTask, PostureTask
 from tests.conftest import random_configuration
 from wbc import WholeBodyController
 from wbc.description import FOOT_RADIUS_M, LEGS

@@ -7,7 +7,7 @@ the motor command (drivers' PD around the integrated plan) must meet on them.
 
 import pytest
 
-from actions import GoalStatus, HighFiveGoal
+from actions import GoalStatus
 from actions.messages import SitGoal, StandGoal
 from benchmarks.robustness import PlantCase, run_high_five
 from sim.control_loop import ControlLoop
