@@ -27,12 +27,13 @@ from actions.go2_actions import (
 from actions.high_five_behaviour import MAX_HOLD_S
 from actions.messages import FollowJointTrajectoryGoal, HighFiveGoal, SitGoal, StandGoal
 from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
+from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.run_recorder import RAISED_LEG, MetricsHook, TickRecorder, write_plot
 from sim.trajectory_file import load_trajectory_goal
 from sim.video_recorder import VideoRecorder, choose_offscreen_gl
 from sim.viewer import Pacer, ViewerHook, window_problem
 from wbc.description import LEGS
-from wbc.errors import ConfigurationError
+from wbc.errors import ConfigurationError, WbcError
 from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
 if TYPE_CHECKING:
@@ -72,6 +73,8 @@ examples:
   go2-wbc high-five --cancel-at 2.5         # ends CANCELED with the foot down
   go2-wbc stand; go2-wbc sit --duration 1.5
   go2-wbc trajectory wave.yaml              # format: go2-wbc trajectory --help
+  go2-wbc high-five --plant identified --plant-param calf_friction_loss=1.4
+  go2-wbc high-five --control-rate 500      # the GO2's usual low-level rate
 
 """
 
@@ -200,9 +203,79 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
+def _plant_param(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` of a plant parameter; the value a number, three for an offset, or a word."""
+    name, sep, value = text.partition("=")
+    if not sep:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, received {text!r}")
+    valid = Plant.parameter_names()
+    if name not in valid:
+        raise argparse.ArgumentTypeError(
+            f"unknown plant parameter {name!r}; valid: {', '.join(valid)}")
+    if name == "cone":
+        return name, value
+    if name == "payload_offset_m":
+        parts = value.split(",")
+        if len(parts) != 3:
+            raise argparse.ArgumentTypeError(
+                f"payload_offset_m: expected three numbers X,Y,Z [m], received {value!r}")
+        return name, tuple(_number(v, "three numbers X,Y,Z [m]") for v in parts)
+    number = _number(value, f"a number for {name}")
+    return name, int(number) if name == "condim" and number.is_integer() else number
+
+
+def _plant_options(parser: argparse.ArgumentParser) -> None:
+    """The simulated plant and the control and physics rates."""
+    group = parser.add_argument_group("plant")
+    group.add_argument("--plant", choices=tuple(PLANT_PRESETS), default=DEFAULT_PLANT,
+                       help="the simulated GO2's joints and contacts, which the controller "
+                            f"does not know (default: {DEFAULT_PLANT}; 'ideal' matches the "
+                            "controller's model)")
+    group.add_argument("--plant-param", type=_plant_param, action="append", default=[],
+                       metavar="NAME=VALUE",
+                       help="change one plant parameter, repeatable: joint_damping, "
+                            "joint_friction_loss, joint_armature, hip_/thigh_/calf_ + "
+                            "damping/friction_loss/armature, foot_friction, condim, cone, "
+                            "impratio, foot_radius_m, payload_kg, payload_offset_m=X,Y,Z")
+    group.add_argument("--control-rate", type=_float_in(10.0, 10000.0, what="a rate",
+                                                        unit="Hz", fmt="g"),
+                       default=1000.0, metavar="HZ",
+                       help="control rate [Hz] (default: 1000; the GO2's usual is 500)")
+    group.add_argument("--physics-dt", type=_float_in(1e-5, 0.01, what="a timestep",
+                                                      unit="s", fmt="g"),
+                       default=None, metavar="SECONDS",
+                       help="physics timestep [s]; a whole number of them per control period "
+                            "(default: 0.001, or the control period if shorter)")
+
+
+def _resolve_plant(args: argparse.Namespace) -> None:
+    """Build ``args.plant_model`` and check the rates; a usage error names the option."""
+    try:
+        args.plant_model = Plant.preset(args.plant).with_params(**dict(args.plant_param))
+    except WbcError as err:
+        args.parser.error(f"--plant-param: {err}")
+    from sim.control_loop import PHYSICS_TIMESTEP_S
+    from sim.mujoco_robot import physics_steps_per_period
+
+    args.control_period_s = 1.0 / args.control_rate
+    if args.physics_dt is None:
+        args.physics_dt = min(PHYSICS_TIMESTEP_S, args.control_period_s)
+    try:
+        physics_steps_per_period(args.control_period_s, args.physics_dt)
+    except WbcError as err:
+        args.parser.error(f"--control-rate: {args.control_rate:g} Hz with --physics-dt "
+                          f"{args.physics_dt:g} s: {err}")
+
+
+def _plant_line(args: argparse.Namespace) -> str:
+    return (f"{args.plant_model.describe()}; control {args.control_rate:g} Hz, physics "
+            f"{args.physics_dt * 1e3:g} ms")
+
+
 def _run_options() -> argparse.ArgumentParser:
     """Options shared by every goal-sending subcommand."""
     common = _Parser(add_help=False)
+    _plant_options(common)
     run = common.add_argument_group("simulation")
     sim_time = _float_in(0.0, 3600.0, what="a sim time", unit="s", fmt="g")
     run.add_argument("--realtime", action="store_true",
@@ -310,12 +383,14 @@ def build_parser() -> argparse.ArgumentParser:
                                                        fmt="g"),
                           default=3.0, metavar="S",
                           help="simulated seconds [s], in [0.001, 60] (default: 3.0)")
-    stand_pd.set_defaults(run=_stand_pd)
+    _plant_options(stand_pd)
+    stand_pd.set_defaults(run=_stand_pd, parser=stand_pd)
     return parser
 
 
 def _check_combinations(args: argparse.Namespace) -> None:
-    """Options that only make sense with another one."""
+    """Options that only make sense with another one; the plant and the rates."""
+    _resolve_plant(args)
     if not hasattr(args, "video"):
         return
     for option, needs in (("fps", "video"), ("video_size", "video"),
@@ -368,7 +443,8 @@ def _stand_pd(args: argparse.Namespace) -> int:
     from sim.simulator import Go2Simulator
     from wbc.joint_pd_controller import JointPdController
 
-    sim = Go2Simulator()
+    sim = Go2Simulator(plant=args.plant_model, timestep_s=args.physics_dt)
+    print(_plant_line(args))
     controller = JointPdController(sim.description.pose("standing"))
     z0 = sim.state()[0][2]
     steps = round(args.duration / sim.timestep_s)
@@ -518,7 +594,10 @@ class GoalRun:
         from sim.control_loop import ControlLoop
         from sim.disturbances import Push, PushSchedule
 
-        loop = ControlLoop.simulated(pose=args.start_pose or "standing")
+        self.say(_plant_line(args))
+        loop = ControlLoop.simulated(pose=args.start_pose or "standing", plant=args.plant_model,
+                                     control_period_s=args.control_period_s,
+                                     physics_timestep_s=args.physics_dt)
         if args.push is not None:
             force_n, duration_s = args.push
             self.pushes = PushSchedule(loop.sim, [Push(
@@ -725,6 +804,9 @@ class GoalRun:
             "action": self.action_name,
             "goal": dataclasses.asdict(self.goal),
             "start_pose": self.args.start_pose or "standing",
+            "plant": dataclasses.asdict(self.args.plant_model),
+            "control_rate_hz": self.args.control_rate,
+            "physics_timestep_s": self.args.physics_dt,
             "result": self.result,
             "phases": phases,
             "events": [e.as_dict() for e in self.events],

@@ -19,13 +19,15 @@ with frictionless joints. Named presets (:data:`PLANT_PRESETS`):
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import mujoco
 import numpy as np
 
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float, check_name
+
+if TYPE_CHECKING:
+    import mujoco
 
 #: The joint types of a leg, in the order of its joints.
 JOINT_TYPES = ("hip", "thigh", "calf")
@@ -162,18 +164,20 @@ class Plant:
 
     def describe(self) -> str:
         """One line: the preset and its joints, contacts and payload."""
-        joints = "; ".join(
-            f"{t} damping {getattr(self, t).damping:g} N m s/rad, friction loss "
-            f"{getattr(self, t).friction_loss:g} N m, armature {getattr(self, t).armature:g}"
-            for t in JOINT_TYPES)
-        if len({getattr(self, t) for t in JOINT_TYPES}) == 1:
-            joints = "joints: " + joints.split(" ", 1)[1]
-        text = (f"plant {self.name}: {joints}; feet: friction {self.foot_friction:g}, condim "
+        def physics(j: JointPhysics) -> str:
+            return (f"damping {j.damping:g} N m s/rad, friction loss {j.friction_loss:g} N m, "
+                    f"armature {j.armature:g} kg m^2")
+
+        if self.hip == self.thigh == self.calf:
+            joints = f"joints: {physics(self.hip)}"
+        else:
+            joints = "; ".join(f"{t}: {physics(getattr(self, t))}" for t in JOINT_TYPES)
+        text = (f"plant {self.name} ({joints}; feet: friction {self.foot_friction:g}, condim "
                 f"{self.condim}, {self.cone} cones, impratio {self.impratio:g}")
         if self.payload_kg:
             text += (f"; payload {self.payload_kg:g} kg at "
                      f"({', '.join(f'{v:g}' for v in self.payload_offset_m)}) m")
-        return text
+        return text + ")"
 
     def joint_physics(self, joint_name: str) -> JointPhysics:
         """The physics of a joint named ``<leg>_<type>_joint``."""
@@ -187,6 +191,10 @@ class Plant:
 
     def apply(self, spec: mujoco.MjSpec) -> None:
         """Give a GO2 spec built by :func:`sim.scene.build_go2_spec` this physics, in place."""
+        # Imported here, not at the top: the command line reads plants before it chooses
+        # MuJoCo's rendering backend (MUJOCO_GL), which must precede MuJoCo's import.
+        import mujoco
+
         spec.option.cone = (mujoco.mjtCone.mjCONE_ELLIPTIC if self.cone == "elliptic"
                             else mujoco.mjtCone.mjCONE_PYRAMIDAL)
         spec.option.impratio = self.impratio

@@ -367,3 +367,50 @@ def test_installed_command_records_a_video_of_the_right_size(tmp_path):
     # The robot lies down: the last frame differs from the first.
     assert np.abs(frames[-1].astype(float) - frames[0].astype(float)).mean() > 1.0
     assert f"wrote {video} ({len(frames)} frames at 10 fps)" in done.stdout
+
+
+# ---------------------------------------------------------------------------- the plant
+
+
+def test_default_run_names_the_menagerie_plant_and_the_rates():
+    code, out = run(["high-five", "--height", "0.25", "--hold", "0"])
+    assert code == EXIT_SUCCEEDED
+    assert out.splitlines()[0] == (
+        "plant menagerie (joints: damping 2 N m s/rad, friction loss 0.2 N m, armature 0.01 "
+        "kg m^2; feet: friction 0.8, condim 6, elliptic cones, impratio 100); control 1000 Hz, "
+        "physics 1 ms")
+
+
+def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
+    report = tmp_path / "r.json"
+    code, out = run(["high-five", "--height", "0.25", "--hold", "0", "--plant", "identified",
+                     "--plant-param", "calf_friction_loss=1.4", "--plant-param",
+                     "payload_offset_m=0.05,0,0", "--control-rate", "500", "--report",
+                     str(report)])
+    assert code == EXIT_SUCCEEDED, out
+    first = out.splitlines()[0]
+    assert first.startswith("plant identified + calf_friction_loss=1.4, "
+                            "payload_offset_m=(0.05, 0, 0) (hip: damping 0.2")
+    assert "calf: damping 0.2 N m s/rad, friction loss 1.4 N m" in first
+    assert first.endswith("control 500 Hz, physics 1 ms")
+    data = json.loads(report.read_text())
+    assert data["plant"]["calf"]["friction_loss"] == 1.4
+    assert data["plant"]["payload_offset_m"] == [0.05, 0.0, 0.0]
+    assert data["control_rate_hz"] == 500.0 and data["physics_timestep_s"] == 0.001
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--plant", "real"], "--plant: invalid choice: 'real' (choose from 'menagerie', "
+                          "'unitree-mujoco', 'identified', 'ideal')"),
+    (["--plant-param", "knee_damping=1"],
+     "--plant-param: unknown plant parameter 'knee_damping'; valid: joint_damping, "),
+    (["--plant-param", "joint_damping=-1"],
+     "--plant-param: hip_damping: expected a value in [0, 10], received -1"),
+    (["--plant-param", "foo"], "--plant-param: expected NAME=VALUE, received 'foo'"),
+    (["--control-rate", "300", "--physics-dt", "0.001"],
+     "--control-rate: 300 Hz with --physics-dt 0.001 s: control_period_s: expected a whole "
+     "number of physics steps of 0.001 s"),
+    (["--control-rate", "0"], "--control-rate: expected a rate in [10, 10000] Hz, received 0"),
+])
+def test_bad_plant_and_rate_options_are_one_line_usage_errors(argv, message, capsys):
+    assert message in usage_error(["high-five", *argv], capsys)
