@@ -236,7 +236,8 @@ def _plant_options(parser: argparse.ArgumentParser) -> None:
                        help="change one plant parameter, repeatable: joint_damping, "
                             "joint_friction_loss, joint_armature, hip_/thigh_/calf_ + "
                             "damping/friction_loss/armature, foot_friction, condim, cone, "
-                            "impratio, foot_radius_m, payload_kg, payload_offset_m=X,Y,Z")
+                            "impratio, foot_radius_m, payload_kg, payload_offset_m=X,Y,Z "
+                            "(default: the preset's values)")
     group.add_argument("--control-rate", type=_float_in(10.0, 10000.0, what="a rate",
                                                         unit="Hz", fmt="g"),
                        default=1000.0, metavar="HZ",

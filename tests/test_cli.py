@@ -86,6 +86,7 @@ def high_five(tmp_path_factory: pytest.TempPathFactory) -> dict:
 def test_high_five_succeeds_and_prints_each_phase_once_then_the_result(high_five):
     assert high_five["code"] == EXIT_SUCCEEDED
     lines = high_five["out"].splitlines()
+    assert lines.pop(0).startswith("plant menagerie (joints: damping 2 N m s/rad")
     assert lines[0] == (f"[{SETTLE_S:7.3f} s] high_five: sending goal "
                         "(target_height 0.40 m, hold 0 s)")
     assert lines[1] == f"[{SETTLE_S:7.3f} s] goal accepted"
