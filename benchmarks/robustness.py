@@ -1,29 +1,37 @@
-"""Robustness of the high five: pushes during the hold, and a plant unlike the controller's model.
+"""Robustness of the high five: pushes during the hold, and plants unlike the controller's model.
 
-Run ``python -m benchmarks.robustness [--quick] [--json PATH]``.
+Run ``python -m benchmarks.robustness [--quick] [--json PATH] [--jobs N]``.
 
-Two tables, measured in closed loop through the public API (``sim.control_loop.ControlLoop``
-with the default :class:`wbc.WholeBodyController`, a HighFive goal of 0.40 m held 1 s):
+Measured in closed loop through the public API (``sim.control_loop.ControlLoop`` with the
+default :class:`wbc.WholeBodyController`, a HighFive goal of 0.40 m), on the default
+``menagerie`` plant unless a row says otherwise:
 
-1. Pushes on the base during the hold: direction x impulse (0.1 s pushes, starting 0.2 s into
-   the hold) -> S (SUCCEEDED), A (ABORTED with the robot up), F (fell: the base came down
-   to 0.2 m, or ended below standing height or tilted beyond 12 deg).
-2. Plant changes (:class:`sim.disturbances.PlantChanges`, sensor noise and control delay
-   through :class:`sim.disturbances.NoisyDelayedRobot`): outcome, raised-foot tracking, stance
-   sliding, lowest base, largest tilt.
+1. Pushes on the base during a 1 s hold: direction x impulse (0.1 s pushes, starting 0.2 s
+   into the hold) -> S (SUCCEEDED), A (ABORTED with the robot up), F (fell: the base came
+   down to 0.2 m, or ended below standing height or tilted beyond 12 deg).
+2. Plant changes (:class:`sim.plant.Plant` presets and parameters, sensor noise and control
+   delay through :class:`sim.disturbances.NoisyDelayedRobot`), 1 s hold: outcome,
+   raised-foot tracking, stance sliding, lowest base, largest tilt.
+3. The joint sweep, 2 s hold: joint damping {0, 0.5, 1, 2, 3} N m s/rad x friction loss
+   {0, 0.2, 0.4} N m x payload {none, 2 kg 5 cm in front of the base's centre}.
+4. The calf sweep, 2 s hold, on the ``identified`` joints: calf friction loss
+   {0.2, 0.5, 1.0, 1.4} N m x joint damping {0.1, 0.3, 2} x payload {none, 2 kg}.
 
-Every run is seeded and in simulated time: the same settings give the same tables.
-``--quick`` runs a 2 x 2 corner of the grid and two plant changes.
+The sweeps' episodes run in parallel processes (``--jobs``). Every run is seeded and in
+simulated time: the same settings give the same tables. ``--quick`` runs a 2 x 2 corner of
+the push grid, two plant changes and the hardest corner of each sweep.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -34,8 +42,8 @@ from benchmarks.qp_timing import machine
 from sim.cli import MetricsHook
 from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop, TickHook
 from sim.disturbances import NoisyDelayedRobot, Push, PushSchedule
-from sim.plant import Plant
 from sim.episode_metrics import EpisodeSummary
+from sim.plant import Plant
 from sim.mujoco_robot import MujocoRobot
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
@@ -100,6 +108,32 @@ PLANT_CASES = (
               position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
 )
 QUICK_PLANT_CASES = (PLANT_CASES[1], PLANT_CASES[9])
+
+#: Payload of the sweeps: 2 kg, 5 cm in front of the base's centre.
+SWEEP_PAYLOAD = {"payload_kg": 2.0, "payload_offset_m": (0.05, 0.0, 0.0)}
+
+
+def _sweep_case(base: Plant, label: str, payload: bool, **joints: float) -> PlantCase:
+    changes = {**joints, **(SWEEP_PAYLOAD if payload else {})}
+    return PlantCase(f"{label}{', 2 kg' if payload else ''}", base.with_params(**changes))
+
+
+#: Joint friction the controller does not know, on Menagerie's contacts: damping
+#: [N m s/rad] x friction loss [N m] (every joint) x payload.
+JOINT_SWEEP = tuple(
+    _sweep_case(MENAGERIE, f"damping {d:g}, friction loss {f:g}", p, joint_damping=d,
+                joint_friction_loss=f)
+    for p in (False, True) for d in (0.0, 0.5, 1.0, 2.0, 3.0) for f in (0.0, 0.2, 0.4))
+#: The identified GO2's joints with more calf friction: calf friction loss [N m] x damping
+#: [N m s/rad] (every joint) x payload.
+CALF_SWEEP = tuple(
+    _sweep_case(Plant.preset("identified"), f"calf friction {c:g}, damping {d:g}", p,
+                calf_friction_loss=c, joint_damping=d)
+    for p in (False, True) for c in (0.2, 0.5, 1.0, 1.4) for d in (0.1, 0.3, 2.0))
+QUICK_JOINT_SWEEP = (JOINT_SWEEP[-1],)
+QUICK_CALF_SWEEP = (CALF_SWEEP[-1],)
+#: The sweeps' high five holds as long as the README's (2 s).
+SWEEP_HOLD_S = 2
 
 
 @dataclass
@@ -245,8 +279,13 @@ def hold_push(direction_deg: float, impulse_ns: float, *, body: str = "base",
 # ---------------------------------------------------------------------------- the tables
 
 
-def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
-    """Run both tables; returns the report (JSON-ready)."""
+def run(*, quick: bool, log: Callable[[str], None] = print,
+        jobs: int | None = None) -> dict[str, Any]:
+    """Run every table; returns the report (JSON-ready).
+
+    The sweeps' episodes run in ``jobs`` processes (default: every core); each episode is
+    deterministic, so the rows do not depend on it.
+    """
     directions = QUICK_DIRECTIONS_DEG if quick else DIRECTIONS_DEG
     impulses = QUICK_IMPULSES_NS if quick else IMPULSES_NS
     cells = []
@@ -267,14 +306,34 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
     plants = []
     for case in QUICK_PLANT_CASES if quick else PLANT_CASES:
         episode = run_high_five(case)
-        plants.append({"name": case.name, "plant": vars(case.plant),
+        plants.append({"name": case.name, "plant": dataclasses.asdict(case.plant),
                        "delay_ticks": case.delay_ticks,
                        "position_noise_rad": case.position_noise_rad,
                        "velocity_noise_rad_s": case.velocity_noise_rad_s, **episode.row()})
         log(f"{case.name}: {episode.outcome} ({episode.status.name})")
+    sweeps = {}
+    for name, cases in (("joint_sweep", QUICK_JOINT_SWEEP if quick else JOINT_SWEEP),
+                        ("calf_sweep", QUICK_CALF_SWEEP if quick else CALF_SWEEP)):
+        started = time.perf_counter()
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            rows = list(pool.map(sweep_row, cases))
+        for row in rows:
+            log(f"{name} {row['name']}: {row['outcome']} ({row['status']}), tilt "
+                f"{row['max_tilt_deg']:.2f} deg")
+        sweeps[name] = {"rows": rows, "wall_s": round(time.perf_counter() - started, 1),
+                        "succeeded": sum(r["status"] == "SUCCEEDED" for r in rows),
+                        "max_tilt_deg": max(r["max_tilt_deg"] for r in rows),
+                        "max_final_tilt_deg": max(r["final_tilt_deg"] for r in rows)}
     return {"mode": "quick" if quick else "full", "machine": machine(),
             "goal": {"target_height_m": HEIGHT_M, "hold_s": HOLD_S}, "push_grid": grid,
-            "plant_changes": plants}
+            "plant_changes": plants, **sweeps}
+
+
+def sweep_row(case: PlantCase) -> dict[str, Any]:
+    """One sweep episode (a 0.40 m high five held :data:`SWEEP_HOLD_S`), as a report row."""
+    episode = run_high_five(case, hold_s=SWEEP_HOLD_S)
+    episode.loop = None  # the row only; the loop stays in the worker
+    return {"name": case.name, "plant": dataclasses.asdict(case.plant), **episode.row()}
 
 
 def _yes(flag: bool) -> str:
@@ -314,6 +373,20 @@ def format_report(report: dict[str, Any]) -> str:
                      f"{row['min_height_m']:>5.3f} {row['max_tilt_deg']:>5.1f} "
                      f"{row['final_tilt_deg']:>8.1f} {row['qp_failures']:>7} "
                      f"{_yes(row['standing']):>8} {_yes(row['fell']):>4}")
+    for key, title in (("joint_sweep", "Joint friction sweep (Menagerie contacts)"),
+                       ("calf_sweep", "Calf friction sweep (identified joints)")):
+        sweep = report[key]
+        lines += ["", f"{title}, {SWEEP_HOLD_S} s hold, {sweep['wall_s']:g} s wall", "",
+                  f"{'plant':<40} {'result':<9} {'track RMS':>9} {'hold RMS':>8} "
+                  f"{'sliding':>7} {'tilt':>5} {'end tilt':>8} {'QP fail':>7}"]
+        for row in sweep["rows"]:
+            lines.append(f"{row['name']:<40} {row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
+                         f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
+                         f"{row['max_tilt_deg']:>5.2f} {row['final_tilt_deg']:>8.2f} "
+                         f"{row['qp_failures']:>7}")
+        lines.append(f"succeeded {sweep['succeeded']}/{len(sweep['rows'])}, max tilt "
+                     f"{sweep['max_tilt_deg']:.2f} deg, worst end tilt "
+                     f"{sweep['max_final_tilt_deg']:.2f} deg")
     return "\n".join(lines)
 
 
@@ -325,9 +398,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="a 2 x 2 corner of the push grid and two plant changes")
     parser.add_argument("--json", type=Path, default=Path("out/robustness.json"),
                         help="where to write the report (default: out/robustness.json)")
+    parser.add_argument("--jobs", type=int, default=None,
+                        help="processes for the sweeps (default: every core)")
     args = parser.parse_args(argv)
+    if args.jobs is not None and args.jobs < 1:
+        parser.error(f"--jobs: expected a whole number >= 1, received {args.jobs}")
     started = time.perf_counter()
-    report = run(quick=args.quick, log=lambda msg: print(
+    report = run(quick=args.quick, jobs=args.jobs, log=lambda msg: print(
         f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
     report["benchmark_wall_s"] = round(time.perf_counter() - started, 1)
     print(format_report(report))

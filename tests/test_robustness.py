@@ -345,11 +345,19 @@ def test_quick_benchmark_prints_both_tables_and_writes_its_json(tmp_path, capsys
     assert (grid["succeeded"], grid["aborted"], grid["fell"]) == (3, 1, 0)
     assert grid["success_rate"] == 0.75 and grid["any_fall"] is False
     rows = report["plant_changes"]
-    assert [row["name"] for row in rows] == ["floor friction 0.5", "delay 2 ticks"]
+    assert [row["name"] for row in rows] == ["foot friction 0.5", "delay 2 ticks"]
     for row in rows:
         assert row["outcome"] == "S" and row["standing"] is True and row["qp_failures"] == 0
         assert 0.0 < row["tracking_rms_mm"] < 5.0 and 0.0 <= row["stance_sliding_max_mm"] < 1.0
-    assert rows[1]["delay_ticks"] == 2 and rows[0]["plant"]["floor_friction"] == 0.5
+    assert rows[1]["delay_ticks"] == 2 and rows[0]["plant"]["foot_friction"] == 0.5
+    # The hardest corner of each sweep: unknown joint friction and a 2 kg payload in front.
+    for key, name in (("joint_sweep", "damping 3, friction loss 0.4, 2 kg"),
+                      ("calf_sweep", "calf friction 1.4, damping 2, 2 kg")):
+        (row,) = report[key]["rows"]
+        assert row["name"] == name and row["status"] == "SUCCEEDED"
+        assert row["max_tilt_deg"] <= 5.0 and row["final_tilt_deg"] <= 0.5
+        assert row["qp_failures"] == 0 and row["stance_sliding_max_mm"] < 2.0
     out = capsys.readouterr().out
     assert "            4 |    S    S\n            8 |    S    A\n" in out
     assert "succeeded 3/4 (75 %), aborted 1, fell 0; any fall: no" in out
+    assert "calf friction 1.4, damping 2, 2 kg       SUCCEEDED" in out
