@@ -43,8 +43,8 @@ from sim.cli import MetricsHook
 from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop, TickHook
 from sim.disturbances import NoisyDelayedRobot, Push, PushSchedule
 from sim.episode_metrics import EpisodeSummary
-from sim.plant import Plant
 from sim.mujoco_robot import MujocoRobot
+from sim.plant import Plant
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.description import LEGS
@@ -134,6 +134,10 @@ QUICK_JOINT_SWEEP = (JOINT_SWEEP[-1],)
 QUICK_CALF_SWEEP = (CALF_SWEEP[-1],)
 #: The sweeps' high five holds as long as the README's (2 s).
 SWEEP_HOLD_S = 2
+#: Plants on which the default controller is compared with one told their joint friction.
+COMPENSATION_CASES = (PlantCase("menagerie", MENAGERIE),
+                      PlantCase("identified, calf friction 1.4",
+                                Plant.preset("identified").with_params(calf_friction_loss=1.4)))
 
 
 @dataclass
@@ -324,9 +328,27 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
                         "succeeded": sum(r["status"] == "SUCCEEDED" for r in rows),
                         "max_tilt_deg": max(r["max_tilt_deg"] for r in rows),
                         "max_final_tilt_deg": max(r["final_tilt_deg"] for r in rows)}
+    if not quick:
+        runs = [(case, informed) for case in COMPENSATION_CASES for informed in (False, True)]
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            sweeps["compensation"] = {"rows": list(pool.map(compensation_row, runs))}
     return {"mode": "quick" if quick else "full", "machine": machine(),
             "goal": {"target_height_m": HEIGHT_M, "hold_s": HOLD_S}, "push_grid": grid,
             "plant_changes": plants, **sweeps}
+
+
+def compensation_row(run: tuple[PlantCase, bool]) -> dict[str, Any]:
+    """A sweep episode by the default controller, or by one told the plant's joint friction."""
+    case, informed = run
+    controller = None
+    if informed:
+        joints = [getattr(case.plant, t) for t in ("hip", "thigh", "calf")]
+        controller = WholeBodyController(
+            known_joint_damping=tuple(j.damping for j in joints),
+            known_joint_friction=tuple(j.friction_loss for j in joints))
+    episode = run_high_five(case, hold_s=SWEEP_HOLD_S, controller=controller)
+    episode.loop = None
+    return {"name": case.name, "known_friction": informed, **episode.row()}
 
 
 def sweep_row(case: PlantCase) -> dict[str, Any]:
@@ -387,6 +409,15 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"succeeded {sweep['succeeded']}/{len(sweep['rows'])}, max tilt "
                      f"{sweep['max_tilt_deg']:.2f} deg, worst end tilt "
                      f"{sweep['max_final_tilt_deg']:.2f} deg")
+    if "compensation" in report:
+        lines += ["", "Known joint friction fed forward (known_joint_damping/_friction)", "",
+                  f"{'plant':<32} {'friction':<8} {'result':<9} {'track RMS':>9} "
+                  f"{'hold RMS':>8} {'sliding':>7} {'tilt':>5} {'end tilt':>8}"]
+        for row in report["compensation"]["rows"]:
+            lines.append(f"{row['name']:<32} {'known' if row['known_friction'] else 'unknown':<8} "
+                         f"{row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
+                         f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
+                         f"{row['max_tilt_deg']:>5.2f} {row['final_tilt_deg']:>8.2f}")
     return "\n".join(lines)
 
 
