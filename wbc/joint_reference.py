@@ -42,6 +42,8 @@ class JointReference:
         #: Desired joint velocities [rad/s].
         self.dq_des = np.zeros(n)
         self._leak_time = np.full(n, as_float("leak_time_s", leak_time_s, low=0.0))
+        self._keep = np.ones(n)  # per-tick decay factors, for the period ``_keep_dt``
+        self._keep_dt = 0.0
         self._anchored = False
         self._offset = np.zeros(n)
 
@@ -49,6 +51,7 @@ class JointReference:
         """Time constant [s] with which these joints' desired state decays towards the
         measured one (0: no decay, only the bounds)."""
         self._leak_time[joints] = as_float("leak_time_s", leak_time_s, low=0.0)
+        self._keep_dt = 0.0  # recompute the decay factors on the next advance
 
     def reset(self, q: np.ndarray, dq: np.ndarray) -> None:
         """Start from the measured joint state [rad], [rad/s]."""
@@ -75,15 +78,18 @@ class JointReference:
         if not self._anchored:
             self.reset(q, dq)
         q_des, dq_des, offset = self.q_des, self.dq_des, self._offset
-        if self._leak_time.any():
-            keep = np.where(self._leak_time > 0.0,
-                            np.maximum(0.0, 1.0 - dt / np.maximum(self._leak_time, 1e-12)), 1.0)
-            q_des -= q
-            q_des *= keep
-            q_des += q
-            dq_des -= dq
-            dq_des *= keep
-            dq_des += dq
+        if dt != self._keep_dt:  # the modes or the period changed: not on every tick
+            leaking = self._leak_time > 0.0
+            self._keep[:] = 1.0
+            self._keep[leaking] = np.maximum(0.0, 1.0 - dt / self._leak_time[leaking])
+            self._keep_dt = dt
+        keep = self._keep
+        q_des -= q
+        q_des *= keep
+        q_des += q
+        dq_des -= dq
+        dq_des *= keep
+        dq_des += dq
         dq_des += dt * qdd
         np.subtract(dq_des, dq, out=offset)
         np.clip(offset, -self.max_velocity_error, self.max_velocity_error, out=offset)
