@@ -204,29 +204,41 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _plant_param(text: str) -> tuple[str, Any]:
-    """``NAME=VALUE`` of a plant parameter; the value a number, three for an offset, or a word."""
-    name, sep, value = text.partition("=")
+    """``NAME=VALUE`` of a plant parameter, checked by the plant itself (name and range).
+
+    The value is a number, three comma-separated numbers for ``payload_offset_m`` or a word
+    for ``cone``; anything else is handed over as text, so that the plant's message says
+    what it expected.
+    """
+    name, sep, value_text = text.partition("=")
     if not sep:
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE, received {text!r}")
-    valid = Plant.parameter_names()
-    if name not in valid:
-        raise argparse.ArgumentTypeError(
-            f"unknown plant parameter {name!r}; valid: {', '.join(valid)}")
-    if name == "cone":
-        return name, value
-    if name == "payload_offset_m":
-        parts = value.split(",")
-        if len(parts) != 3:
-            raise argparse.ArgumentTypeError(
-                f"payload_offset_m: expected three numbers X,Y,Z [m], received {value!r}")
-        return name, tuple(_number(v, "three numbers X,Y,Z [m]") for v in parts)
-    number = _number(value, f"a number for {name}")
-    return name, int(number) if name == "condim" and number.is_integer() else number
+    value: Any = value_text
+    if name != "cone":
+        parts = tuple(_number_or_text(v) for v in value_text.split(","))
+        value = parts if len(parts) > 1 else parts[0]
+        if name == "condim" and isinstance(value, float) and value.is_integer():
+            value = int(value)
+    try:
+        # The ranges do not depend on the preset, so any plant checks them.
+        Plant().with_params(**{name: value})
+    except WbcError as err:
+        message = str(err)
+        if name.startswith("joint_"):  # reported for the first joint type: name the option's
+            message = f"{name}:{message.partition(':')[2]}"
+        raise argparse.ArgumentTypeError(message) from None
+    return name, value
 
 
-def _plant_options(parser: argparse.ArgumentParser) -> None:
-    """The simulated plant and the control and physics rates."""
-    group = parser.add_argument_group("plant")
+def _number_or_text(text: str) -> float | str:
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _plant_options(group: Any) -> None:
+    """The simulated plant and the control and physics rates, added to ``group``."""
     group.add_argument("--plant", choices=tuple(PLANT_PRESETS), default=DEFAULT_PLANT,
                        help="the simulated GO2's joints and contacts, which the controller "
                             f"does not know (default: {DEFAULT_PLANT}; 'ideal' matches the "
@@ -234,10 +246,11 @@ def _plant_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--plant-param", type=_plant_param, action="append", default=[],
                        metavar="NAME=VALUE",
                        help="change one plant parameter, repeatable: joint_damping, "
-                            "joint_friction_loss, joint_armature, hip_/thigh_/calf_ + "
-                            "damping/friction_loss/armature, foot_friction, condim, cone, "
-                            "impratio, foot_radius_m, payload_kg, payload_offset_m=X,Y,Z "
-                            "(default: the preset's values)")
+                            "joint_friction_loss, joint_armature (every joint), hip_/thigh_/"
+                            "calf_ + damping/friction_loss/armature (one joint type), "
+                            "foot_friction, torsional_friction, rolling_friction, condim, "
+                            "cone=elliptic|pyramidal, impratio, foot_radius_m, payload_kg, "
+                            "payload_offset_m=X,Y,Z (default: the preset's values)")
     group.add_argument("--control-rate", type=_float_in(10.0, 10000.0, what="a rate",
                                                         unit="Hz", fmt="g"),
                        default=1000.0, metavar="HZ",
@@ -250,7 +263,10 @@ def _plant_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _resolve_plant(args: argparse.Namespace) -> None:
-    """Build ``args.plant_model`` and check the rates; a usage error names the option."""
+    """Build ``args.plant_model`` and check the rates; a usage error names the option.
+
+    Imports MuJoCo: a ``--video`` run chooses its rendering backend before this.
+    """
     try:
         args.plant_model = Plant.preset(args.plant).with_params(**dict(args.plant_param))
     except WbcError as err:
@@ -262,7 +278,7 @@ def _resolve_plant(args: argparse.Namespace) -> None:
     if args.physics_dt is None:
         args.physics_dt = min(PHYSICS_TIMESTEP_S, args.control_period_s)
     try:
-        physics_steps_per_period(args.control_period_s, args.physics_dt)
+        args.physics_steps = physics_steps_per_period(args.control_period_s, args.physics_dt)
     except WbcError as err:
         args.parser.error(f"--control-rate: {args.control_rate:g} Hz with --physics-dt "
                           f"{args.physics_dt:g} s: {err}")
@@ -276,8 +292,8 @@ def _plant_line(args: argparse.Namespace) -> str:
 def _run_options() -> argparse.ArgumentParser:
     """Options shared by every goal-sending subcommand."""
     common = _Parser(add_help=False)
-    _plant_options(common)
     run = common.add_argument_group("simulation")
+    _plant_options(run)
     sim_time = _float_in(0.0, 3600.0, what="a sim time", unit="s", fmt="g")
     run.add_argument("--realtime", action="store_true",
                      help="pace the simulation to the wall clock (default: as fast as possible)")
@@ -384,13 +400,15 @@ def build_parser() -> argparse.ArgumentParser:
                                                        fmt="g"),
                           default=3.0, metavar="S",
                           help="simulated seconds [s], in [0.001, 60] (default: 3.0)")
-    _plant_options(stand_pd)
+    _plant_options(stand_pd.add_argument_group("simulation"))
     stand_pd.set_defaults(run=_stand_pd, parser=stand_pd)
     return parser
 
 
 def _check_combinations(args: argparse.Namespace) -> None:
     """Options that only make sense with another one; the plant and the rates."""
+    if getattr(args, "video", None) is not None:
+        choose_offscreen_gl()  # before _resolve_plant imports MuJoCo, which reads MUJOCO_GL
     _resolve_plant(args)
     if not hasattr(args, "video"):
         return
@@ -444,13 +462,13 @@ def _stand_pd(args: argparse.Namespace) -> int:
     from sim.simulator import Go2Simulator
     from wbc.joint_pd_controller import JointPdController
 
-    sim = Go2Simulator(plant=args.plant_model, timestep_s=args.physics_dt)
     print(_plant_line(args))
+    sim = Go2Simulator(plant=args.plant_model, timestep_s=args.physics_dt)
     controller = JointPdController(sim.description.pose("standing"))
     z0 = sim.state()[0][2]
-    steps = round(args.duration / sim.timestep_s)
-    for _ in range(steps):
-        sim.step(controller.compute(*sim.state()))
+    # One torque per control period, held over its physics steps (as a driver would).
+    for _ in range(max(1, round(args.duration / args.control_period_s))):
+        sim.step(controller.compute(*sim.state()), args.physics_steps)
     q, _ = sim.state()
     forces = sim.foot_contact_forces()
     print(f"stood {sim.time_s:.2f} s under a joint PD with gravity compensation")
@@ -586,8 +604,6 @@ class GoalRun:
     def run(self) -> int:
         """Run the goal; return the exit code."""
         args = self.args
-        if args.video is not None:
-            choose_offscreen_gl()
         problem = window_problem() if args.viewer else ""
         viewer = args.viewer and not problem
         if problem:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import json
 import math
@@ -27,12 +28,18 @@ from sim.cli import (
     build_parser,
     main,
 )
+from sim.plant import Plant
 from sim.trajectory_file import load_trajectory_goal
 from wbc.description import JOINT_NAMES, LEGS
 
 HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading",
                     "shifting_back", "complete"]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: The first line of a run on the default plant and rates.
+MENAGERIE_LINE = (
+    "plant menagerie (joints: damping 2 N m s/rad, friction loss 0.2 N m, armature 0.01 "
+    "kg m^2; feet: friction 0.8, condim 6, elliptic cones, impratio 100); control 1000 Hz, "
+    "physics 1 ms")
 WAVE_YAML = """\
 joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]
 points:
@@ -68,6 +75,16 @@ def usage_error(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
     return lines[0]
 
 
+def offscreen_rendering_works() -> bool:
+    """Whether a fresh process that chooses its GL backend first can render a frame."""
+    probe = ("from sim.video_recorder import choose_offscreen_gl; choose_offscreen_gl(); "
+             "import mujoco; model = mujoco.MjModel.from_xml_string('<mujoco/>'); "
+             "mujoco.Renderer(model, 16, 16).render()")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, timeout=60,
+                          check=False)
+    return done.returncode == 0
+
+
 @pytest.fixture(scope="module")
 def high_five(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """One high five with a 0 s hold and every file output except the video."""
@@ -86,7 +103,7 @@ def high_five(tmp_path_factory: pytest.TempPathFactory) -> dict:
 def test_high_five_succeeds_and_prints_each_phase_once_then_the_result(high_five):
     assert high_five["code"] == EXIT_SUCCEEDED
     lines = high_five["out"].splitlines()
-    assert lines.pop(0).startswith("plant menagerie (joints: damping 2 N m s/rad")
+    assert lines.pop(0) == MENAGERIE_LINE
     assert lines[0] == (f"[{SETTLE_S:7.3f} s] high_five: sending goal "
                         "(target_height 0.40 m, hold 0 s)")
     assert lines[1] == f"[{SETTLE_S:7.3f} s] goal accepted"
@@ -105,6 +122,9 @@ def test_report_has_the_result_phases_in_order_and_the_feedback(high_five):
     report = high_five["report"]
     assert report["action"] == "high_five"
     assert report["goal"] == {"target_height": 0.4, "hold_seconds": 0}
+    plant = json.loads(json.dumps(dataclasses.asdict(Plant.preset("menagerie"))))
+    assert report["plant"] == plant and report["plant"]["name"] == "menagerie"
+    assert report["control_rate_hz"] == 1000.0 and report["physics_timestep_s"] == 0.001
     assert report["result"] == {
         "status": "SUCCEEDED", "success": True,
         "message": "high five done: foot raised to 0.400 m, held 0 s, back on four feet"}
@@ -358,6 +378,9 @@ def test_installed_command_records_a_video_of_the_right_size(tmp_path):
          "--video-size", "160x120", "--report", str(report)],
         capture_output=True, text=True, timeout=120, check=False)
     if done.returncode == 4 and "offscreen rendering is unavailable" in done.stderr:
+        # Skip only if a fresh process cannot render either: the CLI must choose MUJOCO_GL
+        # before anything imports MuJoCo, or it renders nowhere.
+        assert not offscreen_rendering_works(), done.stderr
         pytest.skip(f"no offscreen OpenGL on this machine: {done.stderr.strip()}")
     assert done.returncode == EXIT_SUCCEEDED, done.stdout + done.stderr
     assert json.loads(report.read_text())["result"]["success"] is True
@@ -371,15 +394,19 @@ def test_installed_command_records_a_video_of_the_right_size(tmp_path):
 
 
 # ---------------------------------------------------------------------------- the plant
+# The default plant's line and report: test_high_five_succeeds... and test_report_has...
 
 
-def test_default_run_names_the_menagerie_plant_and_the_rates():
-    code, out = run(["high-five", "--height", "0.25", "--hold", "0"])
+def test_stand_pd_runs_the_ideal_plant_at_the_control_rate():
+    code, out = run(["stand-pd", "--plant", "ideal", "--control-rate", "500", "--duration",
+                     "0.1"])
     assert code == EXIT_SUCCEEDED
-    assert out.splitlines()[0] == (
-        "plant menagerie (joints: damping 2 N m s/rad, friction loss 0.2 N m, armature 0.01 "
-        "kg m^2; feet: friction 0.8, condim 6, elliptic cones, impratio 100); control 1000 Hz, "
-        "physics 1 ms")
+    lines = out.splitlines()
+    assert lines[0] == (
+        "plant ideal (joints: damping 0 N m s/rad, friction loss 0 N m, armature 0 kg m^2; "
+        "feet: friction 1, condim 3, elliptic cones, impratio 10); control 500 Hz, physics "
+        "1 ms")
+    assert lines[1] == "stood 0.10 s under a joint PD with gravity compensation"
 
 
 def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
@@ -395,23 +422,59 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
     assert "calf: damping 0.2 N m s/rad, friction loss 1.4 N m" in first
     assert first.endswith("control 500 Hz, physics 1 ms")
     data = json.loads(report.read_text())
+    assert data["plant"]["name"].startswith("identified + calf_friction_loss=1.4")
     assert data["plant"]["calf"]["friction_loss"] == 1.4
+    assert data["plant"]["hip"]["friction_loss"] == 0.25  # the preset's, unchanged
     assert data["plant"]["payload_offset_m"] == [0.05, 0.0, 0.0]
     assert data["control_rate_hz"] == 500.0 and data["physics_timestep_s"] == 0.001
+    metrics = data["metrics"]  # the loop ticked at 500 Hz of sim time
+    assert metrics["ticks"] == pytest.approx(500 * metrics["duration_s"], abs=1)
+    assert data["result"]["success"] and metrics["qp_failures"] == 0
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--plant", "real"], "--plant: invalid choice: 'real' (choose from 'menagerie', "
-                          "'unitree-mujoco', 'identified', 'ideal')"),
+    (["--plant", "real"], ("--plant: invalid choice: 'real' (choose from 'menagerie', "
+                           "'unitree-mujoco', 'identified', 'ideal')")),
     (["--plant-param", "knee_damping=1"],
-     "--plant-param: unknown plant parameter 'knee_damping'; valid: joint_damping, "),
+     ("--plant-param: unknown plant parameter 'knee_damping'; valid plant parameters: "
+      + ", ".join(Plant.parameter_names()))),
     (["--plant-param", "joint_damping=-1"],
-     "--plant-param: hip_damping: expected a value in [0, 10], received -1"),
+     "--plant-param: joint_damping: expected a value in [0, 10], received -1"),
+    (["--plant-param", "calf_friction_loss=9"],
+     "--plant-param: calf_friction_loss: expected a value in [0, 5], received 9"),
+    (["--plant-param", "payload_offset_m=0.1,0"],
+     ("--plant-param: payload_offset_m: expected three numbers (x, y, z) [m], received "
+      "(0.1, 0.0)")),
+    (["--plant-param", "cone=round"],
+     "--plant-param: unknown cone 'round'; valid cones: elliptic, pyramidal"),
     (["--plant-param", "foo"], "--plant-param: expected NAME=VALUE, received 'foo'"),
     (["--control-rate", "300", "--physics-dt", "0.001"],
-     "--control-rate: 300 Hz with --physics-dt 0.001 s: control_period_s: expected a whole "
-     "number of physics steps of 0.001 s"),
+     ("--control-rate: 300 Hz with --physics-dt 0.001 s: control_period_s: expected a whole "
+      "number of physics steps of 0.001 s (e.g. 0.001, 0.002, 0.004 s), received "
+      "0.00333333 s")),
+    (["--control-rate", "300"],  # the default timestep, 1 ms, does not divide it either
+     ("--control-rate: 300 Hz with --physics-dt 0.001 s: control_period_s: expected a whole "
+      "number of physics steps of 0.001 s (e.g. 0.001, 0.002, 0.004 s), received "
+      "0.00333333 s")),
     (["--control-rate", "0"], "--control-rate: expected a rate in [10, 10000] Hz, received 0"),
 ])
 def test_bad_plant_and_rate_options_are_one_line_usage_errors(argv, message, capsys):
-    assert message in usage_error(["high-five", *argv], capsys)
+    prog = "go2-wbc high-five"
+    line = usage_error(["high-five", *argv], capsys)
+    assert line == f"{prog}: error: {message} (see '{prog} --help')"
+
+
+def test_stand_pd_checks_the_plant_and_rate_options_too(capsys):
+    line = usage_error(["stand-pd", "--plant-param", "joint_damping=-1"], capsys)
+    assert line.startswith("go2-wbc stand-pd: error: --plant-param: joint_damping: expected")
+
+
+def test_plant_parameters_are_parsed_by_name():
+    parser = build_parser()
+    args = parser.parse_args(["sit", "--plant-param", "condim=4", "--plant-param",
+                              "cone=pyramidal", "--plant-param", "payload_offset_m=0.1,0,-0.02",
+                              "--control-rate", "2000", "--physics-dt", "0.0005"])
+    assert args.plant_param == [("condim", 4), ("cone", "pyramidal"),
+                                ("payload_offset_m", (0.1, 0.0, -0.02))]
+    assert isinstance(args.plant_param[0][1], int)  # MuJoCo's condim is an integer
+    assert (args.control_rate, args.physics_dt) == (2000.0, 0.0005)
