@@ -5,9 +5,9 @@ Run ``python -m benchmarks.qp_timing [--quick] [--json PATH] [--plot PATH]``.
 Three tables, all measured through the library's public API:
 
 1. Backends: one closed-loop episode per backend (200 standing warm-up ticks, excluded from
-   the statistics, then a ``LegLift`` of leg FR to 0.40 m at 1 kHz torque control). Each
-   tick's ``ControlOutput.timings`` give the stage times; the returned QP solution is
-   checked against the problem it solved. The full mode runs the whole lift with a 2 s
+   the statistics, then a ``LegLift`` of leg FR to 0.40 m at 1 kHz, motor commands to the
+   default Menagerie plant). Each tick's ``ControlOutput.timings`` give the stage times; the
+   returned QP solution is checked against the problem it solved. The full mode runs the whole lift with a 2 s
    hold; ``--quick`` shifts in 0.5 s, unloads in 0.3 s and stops after 1.0 s of the lift
    (the first 0.2 s of the raise), so that the one-shot OSQP (~4 ms a tick) stays short.
 2. Scaling: tick time against the number of contacts (four feet standing; three with the
@@ -471,7 +471,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
     scaling += run_scaling(PLACO, PlacoController, ticks)
 
     lift_desc = (f"{WARMUP_TICKS} standing warm-up ticks (excluded), then LegLift {LEG} to "
-                 f"{HEIGHT_M:.2f} m, hold {hold_s:g} s, 1 kHz torque control in MuJoCo")
+                 f"{HEIGHT_M:.2f} m, hold {hold_s:g} s, 1 kHz motor commands in MuJoCo")
     if quick:
         t = QUICK_TIMING
         lift_desc += (f"; timing episodes shift in {t.shift_s:g} s, unload in {t.unload_s:g} s "
