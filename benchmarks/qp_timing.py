@@ -7,8 +7,8 @@ Three tables, all measured through the library's public API:
 1. Backends: one closed-loop episode per backend (200 standing warm-up ticks, excluded from
    the statistics, then a ``LegLift`` of leg FR to 0.40 m at 1 kHz, motor commands to the
    default Menagerie plant). Each tick's ``ControlOutput.timings`` give the stage times; the
-   returned QP solution is checked against the problem it solved. The full mode runs the whole lift with a 2 s
-   hold; ``--quick`` shifts in 0.5 s, unloads in 0.3 s and stops after 1.0 s of the lift
+   returned QP solution is checked against the problem it solved. The full mode runs the
+   whole lift with a 2 s hold; ``--quick`` shifts in 0.5 s, unloads in 0.3 s and stops after 1.0 s of the lift
    (the first 0.2 s of the raise), so that the one-shot OSQP (~4 ms a tick) stays short.
 2. Scaling: tick time against the number of contacts (four feet standing; three with the
    foot held up) and with the swing-foot task's weight set to zero, for the default
