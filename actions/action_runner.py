@@ -35,6 +35,7 @@ from actions.client_goal_handle import ClientGoalHandle
 from actions.errors import ActionUsageError
 from actions.goal_record import GoalRecord
 from actions.goal_status import GoalStatus, check_transition, legal_next_statuses
+from actions.messages import Message
 from actions.responses import (
     CancelResponse,
     CancelReturnCode,
@@ -258,12 +259,18 @@ class ActionRunner:
     ) -> Future[ClientGoalHandle]:
         """Queue a goal for the next tick. Thread-safe. Prefer ``ActionClient.send_goal_async``.
 
+        The server works on a validated deep copy of a :class:`~actions.messages.Message`
+        goal (:meth:`~actions.messages.Message.validated_copy`), so a goal filled field by
+        field is checked here, as one built with keywords is at construction, and later
+        changes to the caller's message do not reach the server.
+
         Returns:
             A future resolved with the goal's handle on the tick that accepts or rejects it
             (at once if the runner is shut down).
 
         Raises:
-            ConfigurationError: ``goal`` is not the server's goal type, or
+            ConfigurationError: ``goal`` is not the server's goal type, one of its fields
+                has the wrong type or value (the message names it), or
                 ``feedback_callback`` is not callable.
         """
         expected = server.action_type.goal_type
@@ -272,6 +279,8 @@ class ActionRunner:
                 f"action '{server.action_name}' takes a {expected.__name__} goal; received "
                 f"{goal!r} (type {type(goal).__name__})"
             )
+        if isinstance(goal, Message):
+            goal = goal.validated_copy()
         if feedback_callback is not None and not callable(feedback_callback):
             raise ConfigurationError(
                 f"feedback_callback must be callable or None; received {feedback_callback!r}"

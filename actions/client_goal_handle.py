@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from concurrent.futures import Future
 from typing import TYPE_CHECKING, Any
 
@@ -38,8 +39,11 @@ class ClientGoalHandle:
 
     @property
     def goal(self) -> Any:
-        """The goal message that was sent."""
-        return self._record.goal
+        """A copy of the goal as the server received it (validated and normalised).
+
+        A copy, so that changing it cannot change the goal the server is running.
+        """
+        return copy.deepcopy(self._record.goal)
 
     @property
     def accepted(self) -> bool:

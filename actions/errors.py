@@ -4,13 +4,20 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from wbc.errors import WbcError
+from wbc.errors import ConfigurationError, WbcError
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
 
     from actions.client_goal_handle import ClientGoalHandle
     from actions.responses import Rejection
+
+
+class UnknownFieldError(ConfigurationError, AttributeError):
+    """A message has no field of that name (a misspelt field); the message lists its fields.
+
+    An ``AttributeError`` too, as setting an unknown attribute on a ROS 2 message is.
+    """
 
 
 class IllegalTransitionError(WbcError):

@@ -1,18 +1,35 @@
-"""Message types of the shipped actions: frozen dataclasses whose fields mirror the .action files.
+"""Message types of the shipped actions: dataclasses whose fields mirror the .action files.
 
 The ROS 2 analogues are the generated Python classes of ``builtin_interfaces``,
 ``std_msgs``, ``geometry_msgs``, ``trajectory_msgs`` and ``control_msgs`` (e.g.
 ``FollowJointTrajectory.Goal``). Like those, every message can be built with no arguments
-(numbers 0, strings and arrays empty). Unlike those, fields are checked when a message is
-built: a wrong type raises :class:`~wbc.errors.ConfigurationError` naming the field, the
-value received and what is valid. Numbers are normalised (``int`` -> ``float`` for float
-fields, NumPy scalars -> Python ones), array fields accept any sequence (a tuple, a NumPy
-array) and are stored as lists, and any field of type :class:`Duration` also accepts a
-number of seconds: ``JointTrajectoryPoint(positions=[0.1], time_from_start=3.0)``.
+(numbers 0, strings and arrays empty) and then filled field by field, nested messages
+included::
 
-Messages are frozen: fields cannot be reassigned (use :func:`dataclasses.replace`), so a goal
-cannot change under a running behaviour. The lists inside are plain lists; do not mutate a
-goal after sending it.
+    goal = FollowJointTrajectoryGoal()
+    goal.trajectory.joint_names = ["FR_calf_joint"]
+    point = JointTrajectoryPoint()
+    point.positions = [-1.9]
+    point.time_from_start = Duration(sec=1)
+    goal.trajectory.points.append(point)
+
+and, as with ROS 2's ``__slots__``, a misspelt field is an error
+(:class:`~actions.errors.UnknownFieldError`), not a new attribute.
+
+Fields are checked when a message is built with keywords and again when it is sent (by
+:meth:`Message.validated_copy`, which ``ActionClient.send_goal_async`` calls): a wrong type
+raises :class:`~wbc.errors.ConfigurationError` naming the field (as a path from the message
+built or sent, e.g. ``FollowJointTrajectoryGoal.trajectory.points[0].positions[1]``), the
+value received and what is valid. Plain assignments are not checked on the spot, so a
+message may pass through invalid states while it is being filled. Numbers are normalised
+(``int`` -> ``float`` for float fields, NumPy scalars -> Python ones), array fields accept
+any sequence (a tuple, a NumPy array) and are stored as lists, and any field of type
+:class:`Duration` or :class:`Time` also accepts a number of seconds or an rclpy-style
+:class:`actions.duration.Duration` / :class:`actions.time.Time` (their ``to_msg()``):
+``JointTrajectoryPoint(positions=[0.1], time_from_start=3.0)``.
+
+A sent goal is safe from later changes: the server receives a validated deep copy, so a
+client that keeps mutating its message afterwards changes nothing on the server.
 """
 
 from __future__ import annotations
@@ -24,6 +41,7 @@ import typing
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from actions.errors import UnknownFieldError
 from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError
 
@@ -31,35 +49,110 @@ _NANOSECONDS_PER_SECOND = 1_000_000_000
 
 
 class Message:
-    """Base class of every message: checks and normalises the fields after construction."""
+    """Base class of every message: checks and normalises the fields, refuses unknown ones.
+
+    Subclasses are ``@dataclass(slots=True)`` classes (or add ``__slots__ = ()``), so that
+    setting a field that does not exist raises instead of adding an attribute.
+    """
+
+    __slots__ = ()
 
     def __post_init__(self) -> None:
-        name = type(self).__name__
-        for field_name, hint in _field_hints(type(self)).items():
-            value = _coerce(hint, getattr(self, field_name), f"{name}.{field_name}")
-            object.__setattr__(self, field_name, value)
+        self._normalise(type(self).__name__)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        try:
+            object.__setattr__(self, name, value)
+        except AttributeError:
+            raise UnknownFieldError(no_such_field(type(self), name)) from None
+
+    def validated_copy(self) -> typing.Self:
+        """A deep copy with every field checked and normalised, as at keyword construction.
+
+        This is what a server receives when the message is sent as a goal: nothing the
+        sender does to its own message afterwards reaches the copy. The message itself is
+        not modified.
+
+        Raises:
+            ConfigurationError: A field (at any depth) has the wrong type or value; the
+                message names its path from this message, e.g. ``HighFiveGoal.target_height``.
+        """
+        return self._normalised(type(self).__name__, copy=True)
+
+    def _normalise(self, where: str) -> None:
+        """Check and normalise every field in place, nested messages included."""
+        for name, hint in field_types(type(self)).items():
+            object.__setattr__(
+                self, name, _coerce(hint, getattr(self, name), f"{where}.{name}", copy=False)
+            )
+        self._check(where)
+
+    def _normalised(self, where: str, *, copy: bool) -> typing.Self:
+        """This message normalised in place (``copy=False``) or a normalised deep copy."""
+        if not copy:
+            self._normalise(where)
+            return self
+        cls = type(self)
+        duplicate = cls.__new__(cls)
+        for name, hint in field_types(cls).items():
+            value = _coerce(hint, getattr(self, name), f"{where}.{name}", copy=True)
+            object.__setattr__(duplicate, name, value)
+        duplicate._check(where)
+        return duplicate
+
+    def _check(self, where: str) -> None:
+        """Checks beyond each field's type (a Duration's ``nanosec`` range); none by default.
+
+        Args:
+            where: How to name this message in an error (its path from the message checked).
+        """
 
 
 @functools.cache
-def _field_hints(cls: type) -> dict[str, Any]:
-    """The resolved type hint of every dataclass field of ``cls``, in field order."""
+def field_types(cls: type) -> dict[str, Any]:
+    """The type of every field of the message class ``cls``, in field order.
+
+    E.g. ``{"target_height": float, "hold_seconds": int}`` for :class:`HighFiveGoal`;
+    arrays are ``list[...]``, nested messages their class.
+    """
     hints = typing.get_type_hints(cls)
     return {f.name: hints[f.name] for f in dataclasses.fields(cls)}
+
+
+def no_such_field(cls: type, name: Any, where: str | None = None) -> str:
+    """The message for a field ``name`` that ``cls`` does not have, listing the ones it has.
+
+    Args:
+        cls: The message class.
+        name: The name asked for.
+        where: The message's path, when it is nested (``"HighFiveGoal"`` by default).
+    """
+    fields = ", ".join(field_types(cls))
+    at = cls.__name__ if where is None or where == cls.__name__ else f"{where} ({cls.__name__})"
+    constant = " (it is a constant)" if isinstance(name, str) and name.isupper() and hasattr(
+        cls, name) else ""
+    return f"{at} has no field {name!r}{constant}; its fields: {fields}"
 
 
 def _describe(value: Any) -> str:
     return f"{value!r} (type {type(value).__name__})"
 
 
-def _coerce(hint: Any, value: Any, where: str) -> Any:
-    """Check ``value`` against the field type ``hint`` and return its normalised form."""
+def _coerce(hint: Any, value: Any, where: str, *, copy: bool) -> Any:
+    """Check ``value`` against the field type ``hint`` and return its normalised form.
+
+    Nested messages are normalised in place, or copied when ``copy`` is true; lists are
+    always new lists.
+    """
     if typing.get_origin(hint) is list:
         (item_hint,) = typing.get_args(hint)
         if isinstance(value, str | bytes | dict) or not hasattr(value, "__iter__"):
             raise ConfigurationError(
                 f"{where} must be a sequence (list, tuple or array); received {_describe(value)}"
             )
-        return [_coerce(item_hint, item, f"{where}[{i}]") for i, item in enumerate(value)]
+        return [
+            _coerce(item_hint, item, f"{where}[{i}]", copy=copy) for i, item in enumerate(value)
+        ]
     if hint is float:
         if isinstance(value, numbers.Real) and not isinstance(value, bool):
             try:
@@ -82,6 +175,8 @@ def _coerce(hint: Any, value: Any, where: str) -> Any:
         if isinstance(value, str):
             return value
         raise ConfigurationError(f"{where} must be a str; received {_describe(value)}")
+    if isinstance(hint, type) and issubclass(hint, Message) and isinstance(value, hint):
+        return value._normalised(where, copy=copy)
     if isinstance(hint, type) and issubclass(hint, _SecondsNanoseconds):
         return hint.coerce(value, where)
     if isinstance(hint, type) and isinstance(value, hint):
@@ -91,7 +186,7 @@ def _coerce(hint: Any, value: Any, where: str) -> Any:
     )
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(order=True, slots=True)
 class _SecondsNanoseconds(Message):
     """Shared arithmetic of :class:`Duration` and :class:`Time`: whole seconds + nanoseconds.
 
@@ -102,11 +197,10 @@ class _SecondsNanoseconds(Message):
     sec: int = 0
     nanosec: int = 0
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
+    def _check(self, where: str) -> None:
         if not 0 <= self.nanosec < _NANOSECONDS_PER_SECOND:
             raise ConfigurationError(
-                f"{type(self).__name__}.nanosec must be in [0, 999999999]; received "
+                f"{where}.nanosec must be in [0, 999999999]; received "
                 f"{self.nanosec} (put whole seconds in sec, or use "
                 f"{type(self).__name__}.from_seconds)"
             )
@@ -134,38 +228,48 @@ class _SecondsNanoseconds(Message):
 
     @classmethod
     def coerce(cls, value: Any, where: str) -> typing.Self:
-        """Return ``value`` if it already is a ``cls``, else ``cls.from_seconds(value)``.
+        """Return ``value`` if it already is a ``cls``, else convert it to one.
+
+        Converted: a finite number of seconds (``cls.from_seconds``), or an object whose
+        ``to_msg()`` returns a ``cls`` (the rclpy-style :class:`actions.duration.Duration`
+        and :class:`actions.time.Time`).
 
         Raises:
-            ConfigurationError: ``value`` is neither a ``cls`` nor a finite number of seconds.
+            ConfigurationError: ``value`` is none of these.
         """
         if isinstance(value, cls):
             return value
         if is_finite_real(value):
             return cls.from_seconds(value)
+        to_msg = getattr(value, "to_msg", None)
+        if callable(to_msg):
+            message = to_msg()
+            if isinstance(message, cls):
+                return message
         raise ConfigurationError(
             f"{where} must be a {cls.__name__} or a finite number of seconds; "
             f"received {_describe(value)}"
         )
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(order=True, slots=True)
 class Duration(_SecondsNanoseconds):
     """A signed span of time (``builtin_interfaces/Duration``): ``sec`` [s] + ``nanosec`` [ns].
 
     ``Duration(sec=1)`` is 1.0 s; ``Duration.from_seconds(2.5)`` is ``sec=2, nanosec=5e8``.
+    rclpy's ``Duration(seconds=1).to_msg()`` is :class:`actions.duration.Duration`.
     """
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(order=True, slots=True)
 class Time(_SecondsNanoseconds):
     """A point in (simulated) time (``builtin_interfaces/Time``), never negative."""
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
+    def _check(self, where: str) -> None:
+        _SecondsNanoseconds._check(self, where)
         if self.sec < 0:
             raise ConfigurationError(
-                f"Time must not be negative; received sec={self.sec}, nanosec={self.nanosec}"
+                f"{where} must not be negative; received sec={self.sec}, nanosec={self.nanosec}"
             )
 
 
@@ -188,7 +292,7 @@ def as_duration(value: Duration | float, name: str = "duration") -> Duration:
 # --- std_msgs, geometry_msgs ---------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Header(Message):
     """``std_msgs/Header``: when (``stamp``, simulated time) and in which frame data was given."""
 
@@ -196,7 +300,7 @@ class Header(Message):
     frame_id: str = ""
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Vector3(Message):
     """``geometry_msgs/Vector3``."""
 
@@ -205,7 +309,7 @@ class Vector3(Message):
     z: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Quaternion(Message):
     """``geometry_msgs/Quaternion``, ``(x, y, z, w)``; the default is the identity."""
 
@@ -215,7 +319,7 @@ class Quaternion(Message):
     w: float = 1.0
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Transform(Message):
     """``geometry_msgs/Transform``: translation [m] and rotation."""
 
@@ -223,7 +327,7 @@ class Transform(Message):
     rotation: Quaternion = field(default_factory=Quaternion)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Twist(Message):
     """``geometry_msgs/Twist``: linear [m/s] and angular [rad/s] velocity."""
 
@@ -234,7 +338,7 @@ class Twist(Message):
 # --- trajectory_msgs -----------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class JointTrajectoryPoint(Message):
     """``trajectory_msgs/JointTrajectoryPoint``: one waypoint, values in ``joint_names`` order.
 
@@ -254,7 +358,7 @@ class JointTrajectoryPoint(Message):
     time_from_start: Duration = field(default_factory=Duration)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class JointTrajectory(Message):
     """``trajectory_msgs/JointTrajectory``: named joints and the waypoints they follow."""
 
@@ -263,7 +367,7 @@ class JointTrajectory(Message):
     points: list[JointTrajectoryPoint] = field(default_factory=list)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class MultiDOFJointTrajectoryPoint(Message):
     """``trajectory_msgs/MultiDOFJointTrajectoryPoint``: one waypoint of multi-DOF joints."""
 
@@ -273,7 +377,7 @@ class MultiDOFJointTrajectoryPoint(Message):
     time_from_start: Duration = field(default_factory=Duration)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class MultiDOFJointTrajectory(Message):
     """``trajectory_msgs/MultiDOFJointTrajectory``; leave it empty unless a server supports it."""
 
@@ -285,7 +389,7 @@ class MultiDOFJointTrajectory(Message):
 # --- control_msgs --------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class JointTolerance(Message):
     """``control_msgs/JointTolerance``: 0 means "server default", -1 means "no limit".
 
@@ -302,7 +406,7 @@ class JointTolerance(Message):
     acceleration: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class JointComponentTolerance(Message):
     """``control_msgs/JointComponentTolerance``: a tolerance on one component of a multi-DOF joint."""
 
@@ -319,7 +423,7 @@ class JointComponentTolerance(Message):
     acceleration: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class FollowJointTrajectoryGoal(Message):
     """Goal of ``control_msgs/action/FollowJointTrajectory``.
 
@@ -344,7 +448,7 @@ class FollowJointTrajectoryGoal(Message):
     goal_time_tolerance: Duration = field(default_factory=Duration)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class FollowJointTrajectoryResult(Message):
     """Result of ``FollowJointTrajectory``: an error code (0 on success) and a readable reason."""
 
@@ -359,7 +463,7 @@ class FollowJointTrajectoryResult(Message):
     error_string: str = ""
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class FollowJointTrajectoryFeedback(Message):
     """Feedback of ``FollowJointTrajectory``: desired, actual and error points per joint."""
 
@@ -373,7 +477,7 @@ class FollowJointTrajectoryFeedback(Message):
 # --- this library's behaviours ---------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class BehaviourResult(Message):
     """Result shared by HighFive, Stand and Sit: did it work, and a readable account."""
 
@@ -381,7 +485,7 @@ class BehaviourResult(Message):
     message: str = ""
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class PhaseFeedback(Message):
     """Feedback shared by HighFive, Stand and Sit.
 
@@ -394,7 +498,7 @@ class PhaseFeedback(Message):
     progress: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class PoseGoal(Message):
     """Goal shared by Stand and Sit: move to a pose.
 
@@ -405,7 +509,7 @@ class PoseGoal(Message):
     duration_s: float = 2.0
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class HighFiveGoal(Message):
     """Goal of HighFive: raise the front-right foot, hold it up, put it back down.
 
@@ -421,30 +525,46 @@ class HighFiveGoal(Message):
 class HighFiveResult(BehaviourResult):
     """Result of HighFive."""
 
+    __slots__ = ()
+
 
 class HighFiveFeedback(PhaseFeedback):
     """Feedback of HighFive; phases e.g. standing, shifting, raising, ready, lowering, complete."""
+
+    __slots__ = ()
 
 
 class StandGoal(PoseGoal):
     """Goal of Stand: rise to the nominal standing pose in ``duration_s`` [s]."""
 
+    __slots__ = ()
+
 
 class StandResult(BehaviourResult):
     """Result of Stand."""
+
+    __slots__ = ()
 
 
 class StandFeedback(PhaseFeedback):
     """Feedback of Stand."""
 
+    __slots__ = ()
+
 
 class SitGoal(PoseGoal):
     """Goal of Sit: lower the body to the resting pose in ``duration_s`` [s]."""
+
+    __slots__ = ()
 
 
 class SitResult(BehaviourResult):
     """Result of Sit."""
 
+    __slots__ = ()
+
 
 class SitFeedback(PhaseFeedback):
     """Feedback of Sit."""
+
+    __slots__ = ()

@@ -1,4 +1,4 @@
-"""Tests of the message dataclasses against the shipped .action files, and of the parser."""
+"""Tests of the message dataclasses: the shipped .action files, filling, checking; the parser."""
 
 from __future__ import annotations
 
@@ -18,11 +18,14 @@ from actions.action_definition import (
     parse_message_text,
 )
 from actions.action_type import ACTION_TYPES, FOLLOW_JOINT_TRAJECTORY, HIGH_FIVE, INTERFACES_DIR
+from actions.errors import UnknownFieldError
 from actions.messages import (
     Duration,
     FollowJointTrajectoryGoal,
     FollowJointTrajectoryResult,
+    Header,
     HighFiveGoal,
+    JointTrajectory,
     JointTrajectoryPoint,
     StandGoal,
     Time,
@@ -259,11 +262,136 @@ def test_wrong_field_types_are_rejected_with_field_received_and_valid(
     assert str(info.value) == message
 
 
-def test_messages_are_frozen() -> None:
-    goal = HighFiveGoal(target_height=0.1, hold_seconds=2)
-    with pytest.raises(dataclasses.FrozenInstanceError):
-        goal.target_height = 0.2  # type: ignore[misc]
-    assert dataclasses.replace(goal, target_height=0.2).target_height == 0.2
+# The keyword cases above, as (class, field, value, message): filled field by field, the same
+# value gets the same message when the message is validated for sending.
+FIELD_BY_FIELD = [
+    (HighFiveGoal, "target_height", "high",
+     "HighFiveGoal.target_height must be a real number; received 'high' (type str)"),
+    (HighFiveGoal, "hold_seconds", 1.5,
+     "HighFiveGoal.hold_seconds must be an integer; received 1.5 (type float)"),
+    (HighFiveGoal, "hold_seconds", True,
+     "HighFiveGoal.hold_seconds must be an integer; received True (type bool)"),
+    (JointTrajectoryPoint, "positions", [0.1, None],
+     "JointTrajectoryPoint.positions[1] must be a real number; received None (type NoneType)"),
+    (JointTrajectoryPoint, "positions", "0.1",
+     ("JointTrajectoryPoint.positions must be a sequence (list, tuple or array); received "
+      "'0.1' (type str)")),
+    (FollowJointTrajectoryGoal, "trajectory", [1.0],
+     ("FollowJointTrajectoryGoal.trajectory must be a JointTrajectory; received [1.0] "
+      "(type list)")),
+    (FollowJointTrajectoryResult, "error_string", 3,
+     "FollowJointTrajectoryResult.error_string must be a str; received 3 (type int)"),
+    (Duration, "nanosec", 1_000_000_000,
+     ("Duration.nanosec must be in [0, 999999999]; received 1000000000 (put whole seconds "
+      "in sec, or use Duration.from_seconds)")),
+]
+
+
+@pytest.mark.parametrize(("cls", "name", "value", "message"), FIELD_BY_FIELD,
+                         ids=[f"{case[0].__name__}.{case[1]}={case[2]!r}" for case in FIELD_BY_FIELD])
+def test_a_field_set_by_assignment_is_checked_when_validated_like_a_keyword(
+    cls: type, name: str, value: object, message: str
+) -> None:
+    with pytest.raises(ConfigurationError) as built:
+        cls(**{name: value})
+    assert str(built.value) == message
+    filled = cls()
+    setattr(filled, name, value)  # not checked on the spot, as the message is being filled
+    with pytest.raises(ConfigurationError) as sent:
+        filled.validated_copy()
+    assert str(sent.value) == message
+
+
+def test_messages_are_built_empty_and_filled_field_by_field_nested_ones_included() -> None:
+    goal = FollowJointTrajectoryGoal()
+    assert goal.trajectory.joint_names == [] and goal.trajectory.points == []
+    assert goal.goal_time_tolerance == Duration() and goal.trajectory.header.frame_id == ""
+    goal.trajectory.joint_names = ["FR_calf_joint"]
+    point = JointTrajectoryPoint()
+    point.positions = [-1.9]
+    point.time_from_start = Duration(sec=1)
+    goal.trajectory.points.append(point)
+    goal.goal_time_tolerance.sec = 1
+    assert goal == FollowJointTrajectoryGoal(
+        trajectory=JointTrajectory(
+            joint_names=["FR_calf_joint"],
+            points=[JointTrajectoryPoint(positions=[-1.9], time_from_start=1.0)],
+        ),
+        goal_time_tolerance=Duration(sec=1),
+    )
+    assert FollowJointTrajectoryGoal().trajectory is not FollowJointTrajectoryGoal().trajectory
+    high_five = HighFiveGoal()
+    high_five.target_height = 0.4
+    high_five.hold_seconds = 2
+    assert repr(high_five) == "HighFiveGoal(target_height=0.4, hold_seconds=2)"
+    assert dataclasses.replace(high_five, hold_seconds=3) == HighFiveGoal(0.4, 3)
+
+
+def test_a_misspelt_field_is_an_error_listing_the_fields() -> None:
+    goal = HighFiveGoal()
+    with pytest.raises(UnknownFieldError) as info:
+        goal.target_hieght = 0.4  # type: ignore[attr-defined]
+    assert str(info.value) == (
+        "HighFiveGoal has no field 'target_hieght'; its fields: target_height, hold_seconds"
+    )
+    assert isinstance(info.value, AttributeError) and isinstance(info.value, ConfigurationError)
+    with pytest.raises(UnknownFieldError, match="has no field 'SUCCESSFUL' .it is a constant."):
+        FollowJointTrajectoryResult().SUCCESSFUL = 1  # type: ignore[misc]
+    with pytest.raises(UnknownFieldError, match="StandResult has no field 'sucess'"):
+        ACTION_TYPES["Stand"].Result().sucess = True  # subclasses have no __dict__ either
+
+
+def test_validated_copy_is_deep_normalised_and_leaves_the_original_as_it_was() -> None:
+    goal = FollowJointTrajectoryGoal()
+    point = JointTrajectoryPoint()
+    point.positions = (np.int64(1), 2)
+    point.time_from_start = 1.5
+    goal.trajectory.points.append(point)
+    copy = goal.validated_copy()
+    sent_point = copy.trajectory.points[0]
+    assert sent_point.positions == [1.0, 2.0] and all(type(x) is float for x in sent_point.positions)
+    assert sent_point.time_from_start == Duration(sec=1, nanosec=500_000_000)
+    assert point.positions == (1, 2) and point.time_from_start == 1.5  # untouched
+    assert sent_point is not point and copy.trajectory is not goal.trajectory
+    point.positions = [5.0]
+    goal.trajectory.points.append(JointTrajectoryPoint())
+    assert copy.trajectory.points == [JointTrajectoryPoint(positions=[1.0, 2.0],
+                                                           time_from_start=1.5)]
+
+
+def test_a_nested_error_names_the_path_from_the_message_checked() -> None:
+    goal = FollowJointTrajectoryGoal()
+    goal.trajectory.points.append(JointTrajectoryPoint(positions=[0.1]))
+    goal.trajectory.points.append(JointTrajectoryPoint())
+    goal.trajectory.points[1].positions.append("x")
+    expected = "trajectory.points[1].positions[0] must be a real number; received 'x' (type str)"
+    with pytest.raises(ConfigurationError) as sent:
+        goal.validated_copy()
+    assert str(sent.value) == f"FollowJointTrajectoryGoal.{expected}"
+    with pytest.raises(ConfigurationError) as built:  # the same goal, built with keywords
+        FollowJointTrajectoryGoal(trajectory=goal.trajectory)
+    assert str(built.value) == f"FollowJointTrajectoryGoal.{expected}"
+    goal.trajectory.points[1].positions = [0.2]
+    goal.trajectory.header.stamp.sec = -1
+    with pytest.raises(ConfigurationError) as stamp:
+        goal.validated_copy()
+    assert str(stamp.value) == (
+        "FollowJointTrajectoryGoal.trajectory.header.stamp must not be negative; received "
+        "sec=-1, nanosec=0"
+    )
+
+
+def test_duration_fields_accept_the_rclpy_style_duration_and_time() -> None:
+    from actions.duration import Duration as RclpyDuration
+    from actions.time import Time as RclpyTime
+
+    point = JointTrajectoryPoint()
+    point.time_from_start = RclpyDuration(seconds=1.25)
+    header = Header(stamp=RclpyTime(seconds=2, nanoseconds=5))
+    assert point.validated_copy().time_from_start == Duration(sec=1, nanosec=250_000_000)
+    assert header.stamp == Time(sec=2, nanosec=5)
+    with pytest.raises(ConfigurationError, match="Header.stamp must be a Time or a finite"):
+        Header(stamp=RclpyDuration(seconds=1))
 
 
 def test_results_of_different_actions_are_not_equal() -> None:
