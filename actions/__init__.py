@@ -28,6 +28,7 @@ from actions.errors import (
     GoalRejectedError,
     IllegalTransitionError,
     RunnerStalledError,
+    UnknownFieldError,
 )
 from actions.goal_status import (
     LEGAL_TRANSITIONS,
@@ -36,6 +37,7 @@ from actions.goal_status import (
     check_transition,
     legal_next_statuses,
 )
+from actions.message_fields import set_message_fields
 from actions.messages import (
     Duration,
     FollowJointTrajectoryFeedback,
@@ -131,6 +133,7 @@ __all__ = [
     "Time",
     "Transform",
     "Twist",
+    "UnknownFieldError",
     "Vector3",
     "WrappedResult",
     "as_duration",
@@ -139,4 +142,5 @@ __all__ = [
     "parse_action_file",
     "parse_action_text",
     "parse_message_text",
+    "set_message_fields",
 ]

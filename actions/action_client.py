@@ -13,6 +13,7 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeoutError
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from actions.action_type import ActionType
 from actions.errors import (
     ActionTimeoutError,
     ActionUsageError,
@@ -24,7 +25,6 @@ from wbc.errors import ConfigurationError
 
 if TYPE_CHECKING:
     from actions.action_runner import ActionRunner
-    from actions.action_type import ActionType
     from actions.client_goal_handle import ClientGoalHandle
     from actions.responses import CancelResponse, FeedbackMessage, WrappedResult
 
@@ -34,17 +34,47 @@ T = TypeVar("T")
 class ActionClient:
     """Client of one named action on a runner. Every method may be called from any thread.
 
+    Made as ``ActionClient(runner, "high_five")``, or in rclpy's order with the interface,
+    ``ActionClient(runner, HIGH_FIVE, "high_five")`` (rclpy: ``ActionClient(node, HighFive,
+    "high_five")``), which also checks that the server has that interface.
+
     Args:
-        runner: The runner serving the action.
-        action_name: The server's name, e.g. ``"high_five"``.
+        runner: The runner serving the action (it plays the part of rclpy's node).
+        action: The server's name, e.g. ``"high_five"``; or its :class:`ActionType` when
+            ``action_name`` follows.
+        action_name: The server's name, when ``action`` is the interface.
 
     Raises:
         UnknownNameError: The runner has no server of that name; lists the served names.
+        ConfigurationError: The interface given is not the one the server serves, or the
+            arguments are of the wrong types.
     """
 
-    def __init__(self, runner: ActionRunner, action_name: str) -> None:
+    def __init__(
+        self, runner: ActionRunner, action: ActionType | str, action_name: str | None = None
+    ) -> None:
+        if action_name is None:
+            if not isinstance(action, str):
+                raise ConfigurationError(
+                    f"ActionClient needs the action's name: ActionClient(runner, "
+                    f"'high_five') or ActionClient(runner, HIGH_FIVE, 'high_five'); received "
+                    f"{action!r} alone"
+                )
+            action_type, action_name = None, action
+        elif not isinstance(action, ActionType):
+            raise ConfigurationError(
+                f"action_type must be an ActionType (e.g. HIGH_FIVE) when a name follows it; "
+                f"received {action!r}"
+            )
+        else:
+            action_type = action
         self._runner = runner
         self._server = runner.server(action_name)
+        if action_type is not None and action_type != self._server.action_type:
+            raise ConfigurationError(
+                f"action '{action_name}' serves the {self._server.action_type.name} interface; "
+                f"received action_type {action_type.name}"
+            )
 
     @property
     def action_name(self) -> str:
@@ -55,6 +85,39 @@ class ActionClient:
     def action_type(self) -> ActionType:
         """The action's interface (``.Goal`` builds a goal)."""
         return self._server.action_type
+
+    def server_is_ready(self) -> bool:
+        """Whether the server takes goals: its runner has not been shut down.
+
+        The server lives in this process and is found when the client is made, so unlike
+        rclpy's there is no discovery to wait for.
+        """
+        return not self._runner.is_shut_down
+
+    def wait_for_server(self, timeout_sec: float | None = None) -> bool:
+        """Wait until the server is ready (rclpy's ``wait_for_server``); here it never waits.
+
+        The server was found when the client was made, so this returns
+        :meth:`server_is_ready` at once: ``True``, or ``False`` after the runner was shut
+        down, which a wait could not change (a runner never restarts). Goals are processed
+        on the control tick, so whoever ticks the runner must keep doing so.
+
+        Args:
+            timeout_sec: Longest wait [s]: ``None`` (no limit) or a finite number >= 0.
+                Accepted for rclpy's signature.
+
+        Returns:
+            Whether the server is ready.
+
+        Raises:
+            ConfigurationError: ``timeout_sec`` is neither ``None`` nor a finite number >= 0.
+        """
+        if timeout_sec is not None and (not is_finite_real(timeout_sec) or timeout_sec < 0):
+            raise ConfigurationError(
+                f"timeout_sec must be None or a finite number of seconds >= 0; received "
+                f"{timeout_sec!r}"
+            )
+        return self.server_is_ready()
 
     def send_goal_async(
         self,
@@ -69,8 +132,14 @@ class ActionClient:
                 for every feedback the goal publishes, in order, after the tick's state
                 change. Exceptions are logged and ignored.
 
+        The goal is checked and copied now (the server works on its own copy, so changing
+        ``goal`` afterwards changes nothing); a goal filled field by field gets the same
+        errors as one built with keywords.
+
         Raises:
-            ConfigurationError: ``goal`` has the wrong type.
+            ConfigurationError: ``goal`` is not the action's goal type, or one of its fields
+                has the wrong type (the message names the field, what was received and what
+                is valid).
         """
         return self._runner.submit_goal(self._server, goal, feedback_callback)
 

@@ -21,6 +21,15 @@ class GoalStatus(IntEnum):
     SUCCEEDED = 4
     CANCELED = 5
     ABORTED = 6
+    # action_msgs/msg/GoalStatus's constant names, so that ROS 2 code such as
+    # `status == GoalStatus.STATUS_SUCCEEDED` runs as written (aliases: same members).
+    STATUS_UNKNOWN = 0
+    STATUS_ACCEPTED = 1
+    STATUS_EXECUTING = 2
+    STATUS_CANCELING = 3
+    STATUS_SUCCEEDED = 4
+    STATUS_CANCELED = 5
+    STATUS_ABORTED = 6
 
     @property
     def is_terminal(self) -> bool:

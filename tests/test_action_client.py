@@ -200,6 +200,97 @@ def test_invalid_wait_arguments(kwargs: dict[str, Any], message: str) -> None:
     assert str(info.value) == message
 
 
+# --- goals filled field by field, the server's copy, waiting for the server ----------------
+
+
+class GoalKeeper(ScriptedBehaviour):
+    """A scripted behaviour that keeps the goal it was started with."""
+
+    def start(self, goal: Any, now_s: float) -> None:
+        super().start(goal, now_s)
+        self.goal = goal
+
+
+def test_a_goal_filled_field_by_field_is_checked_when_sent_with_the_keyword_message() -> None:
+    runner, client = make_client()
+    goal = HighFiveGoal()
+    goal.target_height = "high"  # the mistake is not caught while filling
+    with pytest.raises(ConfigurationError) as sent:
+        client.send_goal_async(goal)
+    with pytest.raises(ConfigurationError) as built:
+        HighFiveGoal(target_height="high")
+    assert str(sent.value) == str(built.value) == (
+        "HighFiveGoal.target_height must be a real number; received 'high' (type str)"
+    )
+    runner.tick(0.0)
+    assert runner.event_log == []  # nothing was queued
+    goal.target_height = 1  # an int is a real number: normalised on the server's copy
+    handle_future = client.send_goal_async(goal)
+    runner.tick(0.1)
+    assert handle_future.result(timeout=0).goal == HighFiveGoal(target_height=1.0)
+    assert type(handle_future.result(timeout=0).goal.target_height) is float
+
+
+def test_the_server_works_on_its_own_copy_of_the_goal() -> None:
+    made: list[ScriptedBehaviour] = []
+    seen: list[Any] = []
+    runner = ActionRunner()
+
+    def goal_callback(goal: Any) -> GoalResponse:
+        seen.append(goal)
+        return GoalResponse.ACCEPT
+
+    def factory() -> GoalKeeper:
+        made.append(GoalKeeper(steps=2))
+        return made[-1]
+
+    ActionServer(runner, HIGH_FIVE, "high_five", factory, goal_callback=goal_callback)
+    client = ActionClient(runner, "high_five")
+    goal = HighFiveGoal()
+    goal.target_height, goal.hold_seconds = 0.3, 2
+    future = client.send_goal_async(goal)
+    goal.target_height, goal.hold_seconds = 0.5, 9  # after sending: changes nothing
+    runner.tick(0.0)
+    handle = future.result(timeout=0)
+    handle.goal.hold_seconds = 30  # nor does changing the handle's copy
+    goal.hold_seconds = 10
+    runner.tick(0.1)
+    expected = HighFiveGoal(target_height=0.3, hold_seconds=2)
+    assert seen == [expected] and made[0].goal == expected and handle.goal == expected
+    assert seen[0] is not goal and made[0].goal is not goal
+    assert handle.get_result_async().result(timeout=0).status == S.SUCCEEDED
+
+
+def test_wait_for_server_and_server_is_ready() -> None:
+    runner, client = make_client()
+    assert client.server_is_ready() is True
+    assert client.wait_for_server() is True
+    assert client.wait_for_server(timeout_sec=0.0) is True
+    runner.shutdown(0.0)
+    assert client.server_is_ready() is False
+    assert client.wait_for_server(timeout_sec=5.0) is False  # at once: it never restarts
+    with pytest.raises(ConfigurationError) as info:
+        client.wait_for_server(timeout_sec=-1.0)
+    assert str(info.value) == (
+        "timeout_sec must be None or a finite number of seconds >= 0; received -1.0"
+    )
+
+
+def test_client_in_rclpy_order_checks_the_interface() -> None:
+    runner, _ = make_client()
+    client = ActionClient(runner, HIGH_FIVE, "high_five")
+    assert (client.action_name, client.action_type) == ("high_five", HIGH_FIVE)
+    with pytest.raises(ConfigurationError) as info:
+        ActionClient(runner, STAND, "high_five")
+    assert str(info.value) == (
+        "action 'high_five' serves the HighFive interface; received action_type Stand"
+    )
+    with pytest.raises(ConfigurationError, match="ActionClient needs the action's name"):
+        ActionClient(runner, HIGH_FIVE)  # type: ignore[call-arg]
+    with pytest.raises(ConfigurationError, match="action_type must be an ActionType"):
+        ActionClient(runner, "HighFive", "high_five")
+
+
 # --- another thread ticks ----------------------------------------------------------------
 
 

@@ -94,3 +94,13 @@ def test_transition_out_of_a_terminal_state_says_it_is_terminal() -> None:
         "illegal goal status transition SUCCEEDED -> EXECUTING; "
         "SUCCEEDED is terminal: no further status change is legal"
     )
+
+
+def test_action_msgs_constant_names_are_aliases() -> None:
+    assert GoalStatus.STATUS_SUCCEEDED is S.SUCCEEDED and GoalStatus.STATUS_UNKNOWN is S.UNKNOWN
+    assert [status.name for status in GoalStatus] == [
+        "UNKNOWN", "ACCEPTED", "EXECUTING", "CANCELING", "SUCCEEDED", "CANCELED", "ABORTED",
+    ]  # iteration and names are unchanged
+    assert all(
+        getattr(GoalStatus, f"STATUS_{status.name}") is status for status in GoalStatus
+    )
