@@ -13,6 +13,7 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeoutError
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from actions.action_runner import ActionRunner
 from actions.action_type import ActionType
 from actions.errors import (
     ActionTimeoutError,
@@ -24,7 +25,6 @@ from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError
 
 if TYPE_CHECKING:
-    from actions.action_runner import ActionRunner
     from actions.client_goal_handle import ClientGoalHandle
     from actions.responses import CancelResponse, FeedbackMessage, WrappedResult
 
@@ -36,10 +36,12 @@ class ActionClient:
 
     Made as ``ActionClient(runner, "high_five")``, or in rclpy's order with the interface,
     ``ActionClient(runner, HIGH_FIVE, "high_five")`` (rclpy: ``ActionClient(node, HighFive,
-    "high_five")``), which also checks that the server has that interface.
+    "high_five")``), which also checks that the server has that interface. In place of the
+    runner, anything that holds one as ``.runner`` will do: a ``ControlLoop``, which plays the
+    part of rclpy's node (``ActionClient(loop, HIGH_FIVE, "high_five")``).
 
     Args:
-        runner: The runner serving the action (it plays the part of rclpy's node).
+        runner: The runner serving the action, or an object with one as ``.runner``.
         action: The server's name, e.g. ``"high_five"``; or its :class:`ActionType` when
             ``action_name`` follows.
         action_name: The server's name, when ``action`` is the interface.
@@ -68,6 +70,14 @@ class ActionClient:
             )
         else:
             action_type = action
+        if not isinstance(runner, ActionRunner):
+            held = getattr(runner, "runner", None)
+            if not isinstance(held, ActionRunner):
+                raise ConfigurationError(
+                    f"runner must be an ActionRunner or hold one as .runner (e.g. a "
+                    f"ControlLoop); received {runner!r}"
+                )
+            runner = held
         self._runner = runner
         self._server = runner.server(action_name)
         if action_type is not None and action_type != self._server.action_type:

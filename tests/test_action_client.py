@@ -291,6 +291,20 @@ def test_client_in_rclpy_order_checks_the_interface() -> None:
         ActionClient(runner, "HighFive", "high_five")
 
 
+def test_anything_holding_the_runner_stands_for_the_node() -> None:
+    runner, _ = make_client()
+    node = Loop(runner)  # like a ControlLoop, it holds the runner as .runner
+    client = ActionClient(node, HIGH_FIVE, "high_five")
+    runner.set_spinner(node.spin_once)
+    assert client.send_goal_and_wait(HF).status == S.SUCCEEDED
+    with pytest.raises(ConfigurationError) as info:
+        ActionClient(None, "high_five")  # type: ignore[arg-type]
+    assert str(info.value) == (
+        "runner must be an ActionRunner or hold one as .runner (e.g. a ControlLoop); "
+        "received None"
+    )
+
+
 # --- another thread ticks ----------------------------------------------------------------
 
 
