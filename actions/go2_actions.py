@@ -6,7 +6,7 @@ from functools import partial
 
 from actions.action_runner import ActionRunner, BusyPolicy
 from actions.action_server import ActionServer
-from actions.action_type import FOLLOW_JOINT_TRAJECTORY, HIGH_FIVE, SIT, STAND
+from actions.action_type import FOLLOW_JOINT_TRAJECTORY, HIGH_FIVE, SIT, STAND, ActionType
 from actions.follow_joint_trajectory_behaviour import (
     FollowJointTrajectoryBehaviour,
     validate_follow_joint_trajectory_goal,
@@ -19,6 +19,14 @@ from actions.robot_context import RobotContext
 #: Action names served for the GO2.
 HIGH_FIVE_ACTION, STAND_ACTION, SIT_ACTION = "high_five", "stand", "sit"
 FOLLOW_JOINT_TRAJECTORY_ACTION = "follow_joint_trajectory"
+#: What :func:`make_go2_runner` serves, action name -> interface, for listing the actions
+#: without building a robot (``go2-wbc actions``).
+GO2_ACTIONS: dict[str, ActionType] = {
+    FOLLOW_JOINT_TRAJECTORY_ACTION: FOLLOW_JOINT_TRAJECTORY,
+    HIGH_FIVE_ACTION: HIGH_FIVE,
+    SIT_ACTION: SIT,
+    STAND_ACTION: STAND,
+}
 
 
 def make_go2_runner(context: RobotContext, *,

@@ -402,6 +402,9 @@ def build_parser() -> argparse.ArgumentParser:
                           help="simulated seconds [s], in [0.001, 60] (default: 3.0)")
     _plant_options(stand_pd.add_argument_group("simulation"))
     stand_pd.set_defaults(run=_stand_pd, parser=stand_pd)
+    from sim.action_cli import add_action_commands  # it imports this module's helpers
+
+    add_action_commands(sub)
     return parser
 
 
@@ -855,7 +858,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run ``go2-wbc``; returns the exit code (see ``go2-wbc --help``)."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    _check_combinations(args)
+    if hasattr(args, "plant"):  # the commands that simulate
+        _check_combinations(args)
     try:
         return int(args.run(args))
     except KeyboardInterrupt:

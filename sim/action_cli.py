@@ -1,0 +1,323 @@
+"""``go2-wbc send-goal``, ``actions`` and ``interface``: ``ros2 action`` habits on a simulated GO2.
+
+``go2-wbc send-goal high_five "{target_height: 0.4, hold_seconds: 2}" --feedback`` does what
+``ros2 action send_goal /high_five go2_high_five/action/HighFive "{...}" --feedback`` does,
+for any served action, against a fresh simulated GO2: it prints the goal, its id and
+acceptance, a line per feedback message with ``--feedback``, the result and the final
+status. ``go2-wbc actions`` is ``ros2 action list -t``; ``go2-wbc interface high_five`` is
+``ros2 interface show``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import sys
+from typing import IO, Any
+
+import yaml
+
+from actions.action_client import ActionClient
+from actions.action_type import ACTION_TYPES, ActionType
+from actions.go2_actions import GO2_ACTIONS
+from actions.goal_status import GoalStatus
+from actions.message_fields import set_message_fields
+from actions.responses import FeedbackMessage
+from sim.cli import (
+    EXIT_CODES_HELP,
+    EXIT_INTERRUPTED,
+    EXIT_NOT_SUCCEEDED,
+    EXIT_REJECTED,
+    EXIT_SUCCEEDED,
+    EXIT_UNAVAILABLE,
+    GOAL_SLACK_S,
+    SETTLE_S,
+    _plant_line,
+    _plant_options,
+)
+from wbc.errors import WbcError
+
+#: Significant digits of the numbers in a feedback line.
+FEEDBACK_DIGITS = 6
+#: Default longest run of a goal [s of simulated time] before send-goal cancels it.
+DEFAULT_TIMEOUT_S = 300.0
+
+SEND_GOAL_HELP = """\
+the goal is a YAML (or JSON) mapping of the goal's fields, as ros2 action send_goal takes it;
+fields left out keep their defaults (0, empty). Nested messages are mappings, a duration is
+{sec: 1, nanosec: 0} or a number of seconds. 'go2-wbc interface ACTION' shows the fields.
+
+examples:
+  go2-wbc send-goal high_five "{target_height: 0.4, hold_seconds: 2}" --feedback
+  go2-wbc send-goal stand "{duration_s: 1.5}"
+  go2-wbc send-goal follow_joint_trajectory "{trajectory: {joint_names: [FR_calf_joint],
+      points: [{positions: [-1.9], time_from_start: {sec: 1}}]}}" --feedback
+
+output: the goal, 'Goal accepted with ID: N' (or the rejection's code and reason), with
+--feedback one line per feedback message with its simulated time, the result, and 'Goal
+finished with status: SUCCEEDED' (or CANCELED, ABORTED). Bad YAML, an unknown field or a
+value of the wrong type is a usage error (exit 2) naming the field.
+
+"""
+
+
+# --------------------------------------------------------------------------- argument types
+
+
+def _served_action(text: str) -> tuple[str, ActionType]:
+    """An argparse type: a served action's name (a leading ``/`` as in ROS 2 is allowed)."""
+    name = text.removeprefix("/")
+    if name not in GO2_ACTIONS:
+        raise argparse.ArgumentTypeError(
+            f"no action named {text!r}; served actions: {', '.join(sorted(GO2_ACTIONS))}")
+    return name, GO2_ACTIONS[name]
+
+
+def _action_or_interface(text: str) -> ActionType:
+    """An argparse type: a served action's name (``high_five``) or an interface (``HighFive``)."""
+    name = text.removeprefix("/")
+    if name in GO2_ACTIONS:
+        return GO2_ACTIONS[name]
+    if name in ACTION_TYPES:
+        return ACTION_TYPES[name]
+    raise argparse.ArgumentTypeError(
+        f"no action or interface named {text!r}; actions: {', '.join(sorted(GO2_ACTIONS))}; "
+        f"interfaces: {', '.join(sorted(ACTION_TYPES))}")
+
+
+def _goal_mapping(text: str) -> dict[Any, Any]:
+    """An argparse type: the goal as a YAML/JSON mapping (an empty text is ``{}``)."""
+    example = '"{name: value, ...}" with the goal\'s fields (go2-wbc interface ACTION)'
+    try:
+        data = yaml.safe_load(text)
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark
+        where = f" at column {mark.column + 1}" if mark is not None and mark.line == 0 else (
+            f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "")
+        raise argparse.ArgumentTypeError(
+            f"not valid YAML{where}: {err.problem}; expected a mapping {example}"
+        ) from None
+    except yaml.YAMLError as err:
+        raise argparse.ArgumentTypeError(f"not valid YAML: {err}") from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise argparse.ArgumentTypeError(
+            f"expected a YAML mapping {example}; received {text!r} (a {type(data).__name__})")
+    return data
+
+
+def _sim_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(
+            f"expected a number of seconds > 0, received {text!r}")
+    return value
+
+
+# --------------------------------------------------------------------------- registration
+
+
+def add_action_commands(sub: Any) -> None:
+    """Add ``send-goal``, ``actions`` and ``interface`` to the ``go2-wbc`` subcommands.
+
+    Args:
+        sub: The subparsers object of the ``go2-wbc`` parser.
+    """
+    send = sub.add_parser(
+        "send-goal", help="send a goal given as YAML to any action (ros2 action send_goal)",
+        description="Send a goal, given as a YAML mapping, to an action of a simulated GO2 "
+                    "and print its id, acceptance, feedback and result, like ros2 action "
+                    "send_goal.",
+        epilog=SEND_GOAL_HELP + EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    send.add_argument("action", type=_served_action, metavar="ACTION",
+                      help="the action's name, as 'go2-wbc actions' lists it (e.g. high_five)")
+    send.add_argument("goal", type=_goal_mapping, metavar="GOAL",
+                      help='the goal\'s fields as YAML, e.g. "{target_height: 0.4, '
+                           'hold_seconds: 2}"')
+    send.add_argument("-f", "--feedback", action="store_true",
+                      help="print every feedback message, one line each (default: off)")
+    send.add_argument("--timeout", type=_sim_seconds, default=DEFAULT_TIMEOUT_S,
+                      metavar="SECONDS",
+                      help="cancel the goal if it has not ended after this many seconds of "
+                           f"simulated time (default: {DEFAULT_TIMEOUT_S:g})")
+    _plant_options(send.add_argument_group("simulation"))
+    send.set_defaults(run=_send_goal, parser=send)
+
+    listing = sub.add_parser(
+        "actions", help="list the served actions with their interfaces (ros2 action list -t)",
+        description="List the actions a simulated GO2 serves, each with its interface.")
+    listing.set_defaults(run=_list_actions, parser=listing)
+
+    interface = sub.add_parser(
+        "interface", help="print an action's .action definition (ros2 interface show)",
+        description="Print the .action definition of an action: its goal, result and "
+                    "feedback fields.")
+    interface.add_argument("interface", type=_action_or_interface, metavar="ACTION",
+                           help="an action name (high_five) or an interface name (HighFive)")
+    interface.set_defaults(run=_show_interface, parser=interface)
+
+
+# --------------------------------------------------------------------------- subcommands
+
+
+def _list_actions(args: argparse.Namespace, stream: IO[str] | None = None) -> int:
+    stream = stream or sys.stdout
+    for name in sorted(GO2_ACTIONS):
+        stream.write(f"{name} [{GO2_ACTIONS[name].name}]\n")
+    return EXIT_SUCCEEDED
+
+
+def _show_interface(args: argparse.Namespace, stream: IO[str] | None = None) -> int:
+    (stream or sys.stdout).write(args.interface.interface_path.read_text(encoding="utf-8"))
+    return EXIT_SUCCEEDED
+
+
+def _send_goal(args: argparse.Namespace) -> int:
+    name, action_type = args.action
+    try:
+        goal = set_message_fields(action_type.Goal(), args.goal).validated_copy()
+    except WbcError as err:
+        args.parser.error(f"GOAL: {err}")
+    return SendGoal(args, name, action_type, goal).run()
+
+
+class SendGoal:
+    """Sends one goal to a fresh simulated GO2 and prints what ``ros2 action send_goal`` does.
+
+    Args:
+        args: The parsed options (plant, rates, ``feedback``, ``timeout``).
+        action_name: The action to send the goal to.
+        action_type: Its interface.
+        goal: The goal, already validated.
+        stream: Where to print (standard output by default).
+    """
+
+    def __init__(self, args: argparse.Namespace, action_name: str, action_type: ActionType,
+                 goal: Any, *, stream: IO[str] | None = None):
+        self.args = args
+        self.action_name = action_name
+        self.action_type = action_type
+        self.goal = goal
+        self.stream = stream or sys.stdout
+
+    def say(self, text: str) -> None:
+        """Print ``text`` (one or more lines)."""
+        self.stream.write(text + "\n")
+        self.stream.flush()
+
+    def run(self) -> int:
+        """Run the goal to its end; return the exit code."""
+        from sim.control_loop import ControlLoop
+
+        args = self.args
+        self.say(_plant_line(args))
+        loop = self.loop = ControlLoop.simulated(
+            plant=args.plant_model, control_period_s=args.control_period_s,
+            physics_timestep_s=args.physics_dt)
+        loop.spin_for(SETTLE_S)  # the plant starts without contact forces: let it settle
+        client = ActionClient(loop.runner, self.action_type, self.action_name)
+        self.say("Waiting for an action server to become available...")
+        if not client.wait_for_server():
+            print(f"go2-wbc: the '{self.action_name}' action server is not available",
+                  file=sys.stderr)
+            return EXIT_UNAVAILABLE
+        self.say("Sending goal:\n" + _block(self.goal) + "\n")
+        handle_future = client.send_goal_async(
+            self.goal, feedback_callback=self._on_feedback if args.feedback else None)
+        # Runs in the tick that decides, before that tick's feedback.
+        handle_future.add_done_callback(self._on_goal_response)
+        handle = None
+        try:
+            while not handle_future.done():
+                loop.spin_once()
+            handle = handle_future.result()
+            if not handle.accepted:
+                return EXIT_REJECTED
+            result_future = handle.get_result_async()
+            deadline_s = loop.robot.time_s + args.timeout
+            canceled = False
+            while not result_future.done():
+                if not canceled and loop.robot.time_s >= deadline_s:
+                    canceled = True
+                    self.say(f"No result after {args.timeout:g} s of simulated time: "
+                             "canceling the goal")
+                    handle.cancel_goal_async()
+                loop.spin_once()
+        except KeyboardInterrupt:
+            return self._interrupted(handle)
+        return self._finish(result_future.result())
+
+    def _on_goal_response(self, future: Any) -> None:
+        handle = future.result()
+        if handle.accepted:
+            self.say(f"Goal accepted with ID: {handle.goal_id}\n")
+        else:
+            rejection = handle.rejection
+            self.say(f"Goal was rejected (code {rejection.code}): {rejection.message}")
+
+    def _on_feedback(self, message: FeedbackMessage) -> None:
+        fields = _rounded(dataclasses.asdict(message.feedback))
+        text = yaml.safe_dump(fields, default_flow_style=True, sort_keys=False,
+                              width=math.inf).strip()
+        self.say(f"Feedback [{self.loop.robot.time_s:7.3f} s]: {text}")
+
+    def _finish(self, wrapped: Any) -> int:
+        self.say("\nResult:\n" + _block(wrapped.result) + "\n")
+        self.say(f"Goal finished with status: {wrapped.status.name}")
+        return EXIT_SUCCEEDED if wrapped.status is GoalStatus.SUCCEEDED else EXIT_NOT_SUCCEEDED
+
+    def _interrupted(self, handle: Any) -> int:
+        """Ctrl-C: cancel the goal and let the robot unwind (a second Ctrl-C stops at once)."""
+        if handle is None or not handle.accepted:
+            return EXIT_INTERRUPTED
+        self.say("Interrupted: canceling the goal")
+        handle.cancel_goal_async()
+        result_future = handle.get_result_async()
+        end_s = self.loop.robot.time_s + GOAL_SLACK_S
+        while not result_future.done() and self.loop.robot.time_s < end_s:
+            self.loop.spin_once()
+        if result_future.done():
+            self._finish(result_future.result())
+        return EXIT_INTERRUPTED
+
+
+class _BlockDumper(yaml.SafeDumper):
+    """Mappings as blocks (one field a line), arrays of numbers or strings on one line."""
+
+
+def _represent_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
+    flow = all(not isinstance(item, dict | list) for item in data)
+    return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+def _represent_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
+    return dumper.represent_mapping("tag:yaml.org,2002:map", data.items(), flow_style=False)
+
+
+_BlockDumper.add_representer(list, _represent_list)
+_BlockDumper.add_representer(dict, _represent_dict)
+
+
+def _block(message: Any) -> str:
+    """A message as an indented YAML block, as ``ros2 action send_goal`` prints one."""
+    text = yaml.dump(dataclasses.asdict(message), Dumper=_BlockDumper, sort_keys=False,
+                     width=100)
+    return "\n".join(f"    {line}" for line in text.rstrip("\n").splitlines())
+
+
+def _rounded(value: Any) -> Any:
+    """``value`` with every float rounded to :data:`FEEDBACK_DIGITS` significant digits."""
+    if isinstance(value, float):
+        return float(f"{value:.{FEEDBACK_DIGITS}g}")
+    if isinstance(value, dict):
+        return {key: _rounded(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_rounded(item) for item in value]
+    return value
+
