@@ -211,6 +211,77 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
 
 
+# ---------------------------------------------------------------------------- recorded states
+
+
+@dataclass
+class Recording:
+    """The measured states of one closed-loop lift, and when they were measured."""
+
+    q: np.ndarray
+    v: np.ndarray
+    t: np.ndarray
+
+
+def record_lift(*, hold_s: float, timing: LegLiftTiming | None) -> Recording:
+    """The default controller lifts FR on the default plant; every lift tick's state."""
+    sim, controller = Go2Simulator(), WholeBodyController()
+    controller.reset(sim.state()[0])
+    for _ in range(WARMUP_TICKS):
+        sim.step_command(controller.step(*sim.state()))
+    lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
+    lift.start(sim.time_s)
+    qs, vs, ts = [], [], []
+    while lift.phase is not LiftPhase.DONE:
+        lift.update(sim.time_s)
+        q, v = sim.state()
+        qs.append(q)
+        vs.append(v)
+        ts.append(sim.time_s)
+        sim.step_command(controller.step(q, v))
+    return Recording(np.array(qs), np.array(vs), np.array(ts))
+
+
+def replay(recording: Recording, factory: Callable[[], BalanceController], *,
+           hold_s: float, timing: LegLiftTiming | None, passes: int = 2) -> dict[str, Any]:
+    """Tick times of a fresh controller fed the recorded states (no simulation between
+    ticks: the controller alone, its caches warm). The lift's targets follow the recorded
+    clock; the last of ``passes`` passes is measured."""
+    samples: list[float] = []
+    stages: dict[str, list[float]] = {}
+    for _ in range(passes):
+        controller = factory()
+        controller.reset(recording.q[0])
+        lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
+        lift.start(float(recording.t[0]))
+        samples, stages = [], {}
+        for q, v, t in zip(recording.q, recording.v, recording.t):
+            lift.update(float(t))
+            start = time.perf_counter()
+            out = controller.step(q, v)
+            samples.append(time.perf_counter() - start)
+            for stage, seconds in out.timings.items():
+                stages.setdefault(stage, []).append(seconds)
+    return {**{f"{k}_us": value for k, value in _stats_us(samples).items()},
+            "stage_median_us": {k: 1e6 * float(np.median(v)) for k, v in stages.items()},
+            "ticks": len(samples)}
+
+
+def run_recorded(*, hold_s: float, timing: LegLiftTiming | None) -> dict[str, Any]:
+    """Default controller (elimination on and off, DAQP cold and hot) and PlaCo, each alone
+    on the same recorded lift."""
+    recording = record_lift(hold_s=hold_s, timing=timing)
+    rows = {}
+    for name, factory in ((DEFAULT, WholeBodyController),
+                          ("daqp-hot (reduced QP)",
+                           lambda: WholeBodyController(backend="daqp-hot")),
+                          ("daqp (full QP)",
+                           lambda: WholeBodyController(eliminate_dynamics=False)),
+                          (PLACO, PlacoController)):
+        rows[name] = replay(recording, factory, hold_s=hold_s, timing=timing)
+    return {"ticks": len(recording.t), "rows": rows}
+
+
 # ---------------------------------------------------------------------------- scaling
 
 
@@ -328,6 +399,16 @@ def format_report(report: dict[str, Any]) -> str:
                    f"median {p['median']:.0f} us (p99 {p['p99']:.0f}): ratio of medians "
                    f"{h2h['median_ratio']:.2f}; per turn p10/p50/p90 {low:.2f}/{mid:.2f}/"
                    f"{high:.2f}")]
+    rec = report["recorded"]
+    lines += ["", (f"Alone, on the recorded states of one lift ({rec['ticks']} ticks, no "
+                   "simulation between ticks): tick time [us]")]
+    head = f"{'controller':<26}{'model':>7}{'asm':>7}{'solve':>8}{'median':>8}{'p90':>8}{'p99':>8}"
+    lines += [head, "-" * len(head)]
+    for name, row in rec["rows"].items():
+        st = row["stage_median_us"]
+        lines.append(f"{name:<26}{_fmt(st.get('model')):>7}{_fmt(st.get('assembly')):>7}"
+                     f"{_fmt(st.get('solve')):>8}{_fmt(row['median_us']):>8}"
+                     f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}")
     lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
     head = (f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}"
             f"{'p99':>8}{'cpu med':>8}")
@@ -381,7 +462,8 @@ def plot(report: dict[str, Any], path: Path) -> None:
 
 def _controllers() -> list[tuple[str, Callable[[], BalanceController]]]:
     makers: list[tuple[str, Callable[[], BalanceController]]] = [
-        (f"{DEFAULT} ({ControllerConfig().backend})", WholeBodyController)]
+        (f"{DEFAULT} ({ControllerConfig().backend})", WholeBodyController),
+        ("daqp, full QP", lambda: WholeBodyController(eliminate_dynamics=False))]
     for name in available_backends():
         makers.append((name, lambda name=name: WholeBodyController(backend=name)))
     makers.append((PLACO, PlacoController))
@@ -463,6 +545,9 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
     head_to_head = run_head_to_head(block_ticks=100, hold_s=hold_s, stop_after_s=stop,
                                     timing=QUICK_TIMING if quick else None)
 
+    log("  alone, on recorded states")
+    recorded = run_recorded(hold_s=hold_s, timing=QUICK_TIMING if quick else None)
+
     log("  episode quality: default backend, whole lift")
     quality = run_episode(WholeBodyController(), hold_s=hold_s, stop_after_s=None, quality=True)
     log("  scaling")
@@ -513,6 +598,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
                     "stop_after_lift_s": stop, "description": lift_desc},
         "backends": rows,
         "head_to_head": head_to_head,
+        "recorded": recorded,
         "scaling": scaling,
         "episode_table": {"controller": f"{DEFAULT} backend",
                           "description": f"whole lift, hold {hold_s:g} s",

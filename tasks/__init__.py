@@ -1,12 +1,24 @@
-"""Acceleration-level tasks for whole-body control: error, Jacobian and drift from Pinocchio."""
+"""Acceleration-level tasks and QP constraints for whole-body control, with compiled kernels."""
 
 from tasks.base_orientation_task import BaseOrientationTask
 from tasks.com_task import ComTask
+from tasks.constraint import Constraint, ConstraintBlock
 from tasks.contact_task import ContactTask
+from tasks.floating_base_dynamics import FloatingBaseDynamics
 from tasks.frame_position_task import FramePositionTask
+from tasks.friction_cones import FrictionCones
+from tasks.joint_limits import JointLimits
+from tasks.kinematics import RobotKinematics
 from tasks.posture_task import PostureTask
+from tasks.stance_contacts import StanceContacts
+from tasks.support_polygon_barrier import SupportPolygonBarrier
 from tasks.task import Task
+from tasks.torque_limits import TorqueLimits
+from tasks.variable_layout import VariableLayout
 
 __all__ = [
-    "BaseOrientationTask", "ComTask", "ContactTask", "FramePositionTask", "PostureTask", "Task",
+    "BaseOrientationTask", "ComTask", "Constraint", "ConstraintBlock", "ContactTask",
+    "FloatingBaseDynamics", "FramePositionTask", "FrictionCones", "JointLimits", "PostureTask",
+    "RobotKinematics", "StanceContacts", "SupportPolygonBarrier", "Task", "TorqueLimits",
+    "VariableLayout",
 ]

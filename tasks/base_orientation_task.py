@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pinocchio as pin
 
+from tasks import task_kernels
 from tasks.task import Task
 from wbc.errors import ConfigurationError
 from wbc.validation import as_vector
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
 
 
 class BaseOrientationTask(Task):
@@ -26,6 +32,8 @@ class BaseOrientationTask(Task):
         self.rotation = np.eye(3)
         self._has_target = True
         self.jacobian[:, 3:6] = np.eye(3)
+        #: Added to the desired angular acceleration [rad/s^2] (a controller's integral term).
+        self.bias = np.zeros(3)
 
     def set_target(self, rotation: np.ndarray) -> None:
         """Set the target rotation ``R_world_base`` (3x3, orthonormal); copies it."""
@@ -46,7 +54,10 @@ class BaseOrientationTask(Task):
         """Set the target from roll, pitch, yaw [rad] (extrinsic X, Y, Z)."""
         self.set_target(pin.rpy.rpyToMatrix(float(roll), float(pitch), float(yaw)))
 
-    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        rotation = data.oMi[1].rotation
-        self.error[:] = pin.log3(rotation.T @ self.rotation)
-        np.subtract(self.reference[1], v[3:6], out=self.error_rate)
+    def update(self, kinematics: RobotKinematics) -> None:
+        task_kernels.base_orientation_task(kinematics.base_rotation, kinematics.v, self.rotation,
+                                           self.reference, self.bias, self.gains, self.error,
+                                           self.error_rate, self.desired_acceleration)
+
+    def compute(self, kinematics: RobotKinematics) -> None:
+        self.update(kinematics)

@@ -2,17 +2,24 @@
 
 from __future__ import annotations
 
-import numpy as np
-import pinocchio as pin
+from typing import TYPE_CHECKING
 
+import numpy as np
+
+from tasks import task_kernels
 from tasks.task import Task
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
+
+_XYZ = np.arange(3)
 
 
 class ComTask(Task):
     """Track a world-frame centre-of-mass position [m] (and velocity [m/s]).
 
-    Reads ``data.com``, ``data.vcom``, ``data.Jcom`` (from ``computeAllTerms``) and the
-    zero-acceleration ``data.acom`` (from ``centerOfMass(..., ACCELERATION)``).
+    Reads the kinematics' ``com_position``, ``com_velocity``, ``com_jacobian`` and
+    ``com_drift`` (the CoM acceleration at zero ``qdd``).
     """
 
     dim = 3
@@ -24,8 +31,12 @@ class ComTask(Task):
         """Set the target position [m] and velocity [m/s] (world frame); copies them."""
         self._set_reference("ComTask", position, velocity)
 
-    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        np.subtract(self._require_target(), data.com[0], out=self.error)
-        np.subtract(self.reference[1], data.vcom[0], out=self.error_rate)
-        self.jacobian[:] = data.Jcom
-        self.drift[:] = data.acom[0]
+    def update(self, kinematics: RobotKinematics) -> None:
+        self._require_target()
+        k = kinematics
+        task_kernels.com_task(k.com_jacobian, k.com_position, k.com_velocity, k.com_drift, _XYZ,
+                              self.reference, self.gains, self.jacobian, self.drift, self.error,
+                              self.error_rate, self.desired_acceleration)
+
+    def compute(self, kinematics: RobotKinematics) -> None:
+        self.update(kinematics)

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
+from tasks import task_kernels
 from tasks.task import Task
 from wbc.errors import ConfigurationError
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
 
 
 class ContactTask(Task):
@@ -23,7 +28,7 @@ class ContactTask(Task):
     With ``radius_m = 0`` this is the plain point contact at the frame origin.
 
     The rows of foot ``i`` are ``3 i .. 3 i + 2`` (world x, y, z). The controller uses them
-    as equality constraints, not as a cost; computing all feet in one task shares the work
+    in equality constraints, not as a cost; computing all feet in one task shares the work
     with the contact forces' Jacobians. ``kp`` is zero (a stance foot has no position
     target); ``kd`` damps any residual sliding. ``error_rate`` is minus the contact points'
     velocities [m/s].
@@ -42,27 +47,19 @@ class ContactTask(Task):
             if not model.existFrame(frame):
                 names = [f.name for f in model.frames]
                 raise ConfigurationError(f"frames: unknown frame {frame!r}; valid frames: {names}")
-        self.frames = frames
+        self.frames = tuple(frames)
         self.frame_ids = [model.getFrameId(f) for f in frames]
         self.dim = 3 * len(frames)
         self.radius_m = float(radius_m)
         super().__init__(kp=0.0, kd=kd, weight=1.0, nv=model.nv)
         self._has_target = True  # the target is implicit: no acceleration
 
-    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        jac, drift, r = self.jacobian, self.drift, self.radius_m
-        world = pin.LOCAL_WORLD_ALIGNED
-        for i, fid in enumerate(self.frame_ids):
-            rows = slice(3 * i, 3 * i + 3)
-            frame_jac = pin.getFrameJacobian(model, data, fid, world)
-            acc = pin.getFrameClassicalAcceleration(model, data, fid, world).vector
-            jac[rows] = frame_jac[:3]
-            drift[rows] = acc[:3]
-            if r:
-                # -[d]x with d = (0, 0, -r): x row += -r * angular y, y row += r * angular x.
-                jac[3 * i] -= r * frame_jac[4]
-                jac[3 * i + 1] += r * frame_jac[3]
-                drift[3 * i] -= r * acc[4]
-                drift[3 * i + 1] += r * acc[3]
-        np.matmul(jac, v, out=self.error_rate)
-        np.negative(self.error_rate, out=self.error_rate)
+    def update(self, kinematics: RobotKinematics) -> None:
+        k = kinematics
+        task_kernels.rolling_contacts(k.frame_jacobian, k.frame_drift, self.frame_indices,
+                                      self.radius_m, k.v, self.jacobian, self.drift,
+                                      self.error_rate)
+        np.multiply(self.gains[1], self.error_rate, out=self.desired_acceleration)
+
+    def compute(self, kinematics: RobotKinematics) -> None:
+        self.update(kinematics)

@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pinocchio as pin
 
+from tasks import task_kernels
 from tasks.task import Task
 from wbc.errors import ConfigurationError
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -33,9 +39,10 @@ class FramePositionTask(Task):
         if not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
             raise ConfigurationError(f"axes: expected a subset of 'xyz', received {axes!r}")
         self.frame = frame
+        self.frames = (frame,)
         self.frame_id = model.getFrameId(frame)
         self.axes = axes
-        self._rows = [_AXES[a] for a in axes]
+        self._axes = np.array([_AXES[a] for a in axes], dtype=np.int64)
         self.dim = len(axes)
         super().__init__(kp=kp, kd=kd, weight=weight, nv=model.nv)
 
@@ -43,15 +50,13 @@ class FramePositionTask(Task):
         """Set the target position [m] and velocity [m/s] on the task's axes; copies them."""
         self._set_reference(self.frame, position, velocity)
 
-    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        target = self._require_target()
-        rows = self._rows
-        jac = pin.getFrameJacobian(model, data, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
-        self.jacobian[:] = jac[rows]
-        position = data.oMf[self.frame_id].translation
-        np.subtract(target, position[rows], out=self.error)
-        velocity = pin.getFrameVelocity(model, data, self.frame_id, pin.LOCAL_WORLD_ALIGNED).linear
-        np.subtract(self.reference[1], velocity[rows], out=self.error_rate)
-        acc = pin.getFrameClassicalAcceleration(model, data, self.frame_id,
-                                                pin.LOCAL_WORLD_ALIGNED).linear
-        self.drift[:] = acc[rows]
+    def update(self, kinematics: RobotKinematics) -> None:
+        self._require_target()
+        k = kinematics
+        task_kernels.frame_position_task(
+            k.frame_jacobian, k.frame_position, k.frame_velocity, k.frame_drift,
+            self.frame_indices[0], self._axes, self.reference, self.gains, self.jacobian,
+            self.drift, self.error, self.error_rate, self.desired_acceleration)
+
+    def compute(self, kinematics: RobotKinematics) -> None:
+        self.update(kinematics)

@@ -2,19 +2,25 @@
 
 from __future__ import annotations
 
-import numpy as np
-import pinocchio as pin
+from typing import TYPE_CHECKING
 
+import numpy as np
+
+from tasks import task_kernels
 from tasks.task import Task
 from wbc.errors import ConfigurationError
 from wbc.validation import as_vector
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
 
 
 class PostureTask(Task):
     """Track joint positions [rad] of the ``n_joints`` actuated joints (after the free flyer).
 
     Besides the scalar ``weight``, each joint has a relative weight in ``joint_weights``
-    (ones by default): a joint trajectory raises a few joints' weights to track them tightly.
+    (the task's ``row_weights``, ones by default): a joint trajectory raises a few joints'
+    weights to track them tightly.
     """
 
     def __init__(self, *, n_joints: int = 12, kp: float = 25.0, kd: float | None = None,
@@ -22,7 +28,11 @@ class PostureTask(Task):
         self.dim = n_joints
         super().__init__(kp=kp, kd=kd, weight=weight, nv=6 + n_joints)
         self.jacobian[:, 6:] = np.eye(n_joints)
-        self.joint_weights = np.ones(n_joints)
+
+    @property
+    def joint_weights(self) -> np.ndarray:
+        """The per-joint multipliers of ``weight`` (n_joints,), the task's ``row_weights``."""
+        return self.row_weights
 
     def set_target(self, joint_positions: np.ndarray, velocity: np.ndarray | None = None) -> None:
         """Set the target joint positions [rad] and velocities [rad/s]; copies them."""
@@ -34,8 +44,12 @@ class PostureTask(Task):
         if np.any(weights < 0.0):
             raise ConfigurationError(
                 f"PostureTask.joint_weights: expected values >= 0, received {weights.tolist()}")
-        self.joint_weights[:] = weights
+        self.row_weights[:] = weights
 
-    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        np.subtract(self._require_target(), q[7:], out=self.error)
-        np.subtract(self.reference[1], v[6:], out=self.error_rate)
+    def update(self, kinematics: RobotKinematics) -> None:
+        self._require_target()
+        task_kernels.posture_task(kinematics.q, kinematics.v, self.reference, self.gains,
+                                  self.error, self.error_rate, self.desired_acceleration)
+
+    def compute(self, kinematics: RobotKinematics) -> None:
+        self.update(kinematics)

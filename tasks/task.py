@@ -3,19 +3,23 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pinocchio as pin
 
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float, as_vector
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
 
 
 class Task:
     """An acceleration-level task on the generalized accelerations ``qdd`` (nv,).
 
-    Each tick, :meth:`update` reads Pinocchio data (already updated by the controller with
-    ``computeAllTerms`` and frame placements) and fills:
+    Each tick, :meth:`update` reads the robot's kinematics (a
+    :class:`tasks.RobotKinematics` already updated at the measured state) and fills, in
+    place:
 
     - ``error`` (dim,): target minus current value, in the task space;
     - ``error_rate`` (dim,): target velocity minus current velocity;
@@ -23,16 +27,23 @@ class Task:
     - ``drift`` (dim,): the task acceleration at ``qdd = 0`` (``Jdot v``);
     - ``desired_acceleration`` (dim,): ``kp * error + kd * error_rate + feedforward``.
 
-    The QP term is ``weight * ||jacobian @ qdd + drift - desired_acceleration||^2``.
-    Gains default to critical damping, ``kd = 2 sqrt(kp)``.
+    The QP term is ``weight * row_weights * (jacobian @ qdd + drift - desired)^2``, summed
+    over the rows. Gains default to critical damping, ``kd = 2 sqrt(kp)``.
+
+    To write a task, subclass this, set ``dim``, list the frames it reads in ``frames``
+    and implement :meth:`compute`; write into the arrays in place (``array[...] = ...``):
+    a controller that registers the task stacks these arrays into its QP blocks, allocated
+    once. The built-in tasks override :meth:`update` with one compiled call.
 
     The references live in ``reference`` (3, dim): target, target velocity, feed-forward
     acceleration; the gains in ``gains``: kp, kd, weight. Both are updated in place (setters
-    copy their arguments in), so a compiled controller can read them without copies.
+    copy their arguments in), so compiled code can read them without copies.
     """
 
     #: Number of task rows.
     dim: int = 0
+    #: Names of the frames whose kinematics the task reads (``RobotKinematics.frames``).
+    frames: tuple[str, ...] = ()
 
     def __init__(self, *, kp: float, kd: float | None = None, weight: float = 1.0,
                  nv: int = 18):
@@ -53,6 +64,10 @@ class Task:
         self.jacobian = np.zeros((self.dim, nv))
         self.drift = np.zeros(self.dim)
         self.desired_acceleration = np.zeros(self.dim)
+        #: Per-row multipliers of ``weight`` (ones by default).
+        self.row_weights = np.ones(self.dim)
+        #: Indices of ``frames`` in the kinematics, set by :meth:`bind`.
+        self.frame_indices = np.zeros(len(self.frames), dtype=np.int64)
 
     @property
     def kp(self) -> float:
@@ -91,7 +106,7 @@ class Task:
         self.gains[0], self.gains[1] = kp, kd
 
     def set_weight(self, weight: float) -> None:
-        """Set the cost weight (>= 0)."""
+        """Set the cost weight (>= 0; 0 takes the task out of the QP)."""
         self.gains[2] = as_float("weight", weight, low=0.0)
 
     def set_feedforward(self, acceleration: np.ndarray) -> None:
@@ -108,24 +123,25 @@ class Task:
         self.reference[0], self.reference[1] = target, velocity
         self._has_target = True
 
-    def update(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
-        """Recompute error, Jacobian, drift and desired acceleration.
+    def bind(self, kinematics: RobotKinematics) -> None:
+        """Resolve ``frames`` in ``kinematics`` (called when a controller registers the task).
 
-        Args:
-            model: The Pinocchio model.
-            data: Its data, updated at ``(q, v)`` by ``computeAllTerms`` (zero-acceleration
-                bias terms) and ``updateFramePlacements``.
-            q: Configuration (nq,). v: Velocity (nv,).
+        Raises:
+            ConfigurationError: The kinematics does not compute one of the frames.
         """
-        self.compute(model, data, q, v)
+        for i, frame in enumerate(self.frames):
+            self.frame_indices[i] = kinematics.frame_index(frame)
+
+    def update(self, kinematics: RobotKinematics) -> None:
+        """Recompute error, Jacobian, drift and desired acceleration at the last state."""
+        self.compute(kinematics)
         desired = self.desired_acceleration
-        np.multiply(self.gains[0], self.error, out=desired)
-        desired += self.gains[1] * self.error_rate
+        desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
         desired += self.reference[2]
 
-    def compute(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray) -> None:
+    def compute(self, kinematics: RobotKinematics) -> None:
         """Fill ``error``, ``error_rate``, ``jacobian`` and ``drift``; subclasses implement."""
-        raise NotImplementedError
+        raise NotImplementedError(f"{type(self).__name__}.compute")
 
     def _require_target(self) -> np.ndarray:
         """The target (the internal array), or a clear error when it was never set."""

@@ -34,7 +34,8 @@ def test_machine_block(quick_run):
 def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
     report, _ = quick_run
     rows = {row["name"]: row for row in report["backends"]}
-    expected = {"default (daqp)", "placo", *available_backends(), *missing_backends()}
+    expected = {"default (daqp)", "daqp, full QP", "placo", *available_backends(),
+                *missing_backends()}
     assert set(rows) == expected
     for name, row in rows.items():
         if name in missing_backends():
@@ -58,6 +59,17 @@ def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
     assert 0 < low <= mid <= high
     assert rows["placo"]["stage_median_us"]["assembly"] is None
     assert rows["daqp"]["failures"] == 0
+    assert rows["daqp, full QP"]["failures"] == 0
+
+
+def test_recorded_states_replay_every_controller_alike(quick_run):
+    report, _ = quick_run
+    recorded = report["recorded"]
+    assert set(recorded["rows"]) == {"default", "daqp-hot (reduced QP)", "daqp (full QP)",
+                                     "placo"}
+    for name, row in recorded["rows"].items():
+        assert row["ticks"] == recorded["ticks"] > 500, name
+        assert 0 < row["median_us"] <= row["p90_us"] <= row["p99_us"], name
 
 
 def test_scaling_and_episode_tables(quick_run):

@@ -1,14 +1,15 @@
-"""The compiled assembly builds the same QP terms as the task classes (the reference)."""
+"""The QP builder's compiled stages: the reduced QP has the full QP's solution, exactly."""
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from tasks import ContactTask, PostureTask
+from tasks.task_kernels import log3
 from tests.conftest import random_configuration
 from wbc import WholeBodyController
-from wbc.description import FOOT_RADIUS_M, LEGS
-from wbc.qp_kernel import CON, DYN, NV, SUP, TAU, log3
+from wbc import qp_kernel
+from wbc.backends.daqp_backend import DaqpBackend
+from wbc.description import LEGS
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -23,67 +24,121 @@ def test_log3_matches_pinocchio(seed):
             np.testing.assert_allclose(log3(R), pin.log3(R), atol=1e-9)
 
 
-def reference_terms(c, q, v):
-    """H and f of the tasks, and the contact rows, from the task classes."""
-    model, data = c.model, c.model.createData()
-    pin.computeAllTerms(model, data, q, v)
-    pin.updateFramePlacements(model, data)
-    pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
-    H = c._h_const.copy()
-    f = np.zeros(H.shape[0])
-    contact = ContactTask(model, [f"{leg}_foot" for leg in LEGS], radius_m=FOOT_RADIUS_M,
-                          kd=c.config.contact_damping)
-    contact.update(model, data, q, v)
-    M = np.triu(data.M) + np.triu(data.M, 1).T
-    terms = [c.com_task, c.base_task, c.posture_task]
-    terms += [c.foot_tasks[leg] for leg in LEGS if leg not in c.stance_legs]
-    for task in terms:
-        task.update(model, data, q, v)
-        weights = task.weight * (task.joint_weights if isinstance(task, PostureTask)
-                                 else np.ones(task.dim))
-        J = task.jacobian
-        H[:NV, :NV] += J.T @ (weights[:, None] * J)
-        f[:NV] += J.T @ (weights * (task.drift - task.desired_acceleration))
-    f[:30] -= c._rate_weights * c._x_prev
-    S = np.hstack([M[6:], -contact.jacobian[:, 6:].T])  # tau = S x + h_a
-    H[:30, :30] += c.config.torque_rate_weight * S.T @ S
-    f[:30] += c.config.torque_rate_weight * S.T @ (data.nle[6:] - c._tau_prev)
-    return H, f, contact, data
-
-
-@pytest.mark.parametrize("swing", [None, "FR", "RL"])
-def test_kernel_matches_task_classes(description, model, swing):
-    c = WholeBodyController(base_orientation_ki=0.0)  # the integral is the controller's own
-    standing = description.pose("standing")
+def controller_at(model, standing, swing, seed):
+    """A controller with ``swing`` legs up, updated at a perturbed state."""
+    c = WholeBodyController()
     c.reset(standing)
-    if swing:
-        c.set_max_normal_force(swing, 0.0)
-        c.set_swing(swing)
-        c.set_foot_target(swing, c.foot_position(swing) + [0.05, 0.0, 0.1], [0.1, 0, 0.2], [1, 2, 3])
+    for leg in swing:
+        c.set_max_normal_force(leg, 0.0)
+        c.set_swing(leg)
+        c.set_foot_target(leg, c.foot_position(leg) + [0.05, 0.0, 0.1], [0.1, 0, 0.2], [1, 2, 3])
     c.set_com_target(c.com_target + [0.01, -0.02, 0.0], [0.05, 0.0, 0.0], [0.1, 0.2, 0.0])
     c.set_posture_weights(np.linspace(0.5, 3.0, 12))
-    rng = np.random.default_rng(3)
-    for _ in range(3):
-        q = random_configuration(model, rng, scale=0.1, base=standing)
-        v = rng.normal(size=18) * 0.3
-        c._update_model(q, v)
-        c._assemble(q, v)
-        H, f, contact, data = reference_terms(c, q, v)
-        p = c.problem
-        np.testing.assert_allclose(p.H, H, atol=1e-9)
-        np.testing.assert_allclose(p.f, f, atol=1e-9)
-        M = np.triu(data.M) + np.triu(data.M, 1).T
-        np.testing.assert_allclose(p.A[DYN:DYN + 6, :NV], M[:6], atol=1e-12)
-        np.testing.assert_allclose(p.A[TAU:TAU + 12, :NV], M[6:], atol=1e-12)
-        np.testing.assert_allclose(p.A[CON:CON + 12, :NV], contact.jacobian, atol=1e-12)
-        rhs = contact.kd * contact.error_rate - contact.drift
-        for i, leg in enumerate(LEGS):
-            rows = slice(CON + 3 * i, CON + 3 * i + 3)
-            if leg == swing:
-                assert np.all(p.upper[rows] >= 1e30)
-            else:
-                np.testing.assert_allclose(p.lower[rows], rhs[3 * i:3 * i + 3], atol=1e-9)
-        # The support rows: centre of mass inside the (three- or four-foot) polygon.
-        com_jac = data.Jcom[:2]
-        for k in range(c._n_edges):
-            np.testing.assert_allclose(p.A[SUP + k, :NV], c._normals[k] @ com_jac, atol=1e-12)
+    rng = np.random.default_rng(seed)
+    q = random_configuration(model, rng, scale=0.1, base=standing)
+    v = rng.normal(size=18) * 0.3
+    c.kinematics.update(q, v)
+    c._q = q
+    c._before_update()
+    c.builder.update()
+    return c
+
+
+@pytest.mark.parametrize("swing", [(), ("FR",), ("RL",)])
+@pytest.mark.parametrize("seed", range(3))
+def test_reduced_qp_has_the_full_qps_solution(model, standing, swing, seed):
+    c = controller_at(model, standing, swing, seed)
+    builder = c.builder
+    reduced = builder.assemble()
+    assert builder.reduced
+    layout = builder.layout
+    assert layout.n == 18 + 3 * (4 - len(swing)) + 1      # no force variables in the air
+    assert reduced.n == 13 and not reduced.is_equality.any()
+    z = DaqpBackend().solve(reduced)
+    assert z.found, z.reason
+    full = builder.assemble_full()   # before accept(): the rate costs pull to the last x
+    reference = DaqpBackend().solve(full)
+    builder.reduced = True
+    x = builder.accept(z.x).copy()
+    assert reference.found, reference.reason
+    np.testing.assert_allclose(x, reference.x, atol=1e-6, rtol=1e-6)
+    eq, ineq = full.violations(x)
+    assert eq < 1e-9 and ineq < 1e-7
+    # The same cost: the reduced objective equals the full one at the mapped point.
+    def objective(p, y):
+        return 0.5 * y @ p.H @ y + p.f @ y
+    z2 = z.x + 1e-3 * np.random.default_rng(seed).normal(size=z.x.size)
+    x2 = builder._problem().T @ z2 + builder._problem().t0
+    gap = (objective(full, x2) - objective(full, x)) - (objective(reduced, z2)
+                                                         - objective(reduced, z.x))
+    assert abs(gap) < 1e-9 * max(1.0, abs(objective(full, x)))
+
+
+@pytest.mark.parametrize("swing", [(), ("RL",)])
+def test_any_reduced_point_satisfies_the_eliminated_equalities(model, standing, swing):
+    c = controller_at(model, standing, swing, 7)
+    builder = c.builder
+    builder.assemble()
+    entry = builder._problem()
+    full = builder.problem
+    equality = full.is_equality
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        x = entry.T @ rng.normal(size=entry.T.shape[1]) * 10.0 + entry.t0
+        residual = full.A[equality] @ x - full.lower[equality]
+        np.testing.assert_allclose(residual, 0.0, atol=1e-8)
+
+
+def test_task_costs_match_the_dense_formula(model, standing):
+    c = controller_at(model, standing, ("FR",), 3)
+    builder = c.builder
+    full = builder.assemble_full()
+    H = np.zeros_like(full.H)
+    f = np.zeros_like(full.f)
+    nv = 18
+    for task in builder.tasks:
+        if task not in builder._active_tasks:
+            continue
+        w = task.weight * task.row_weights
+        residual = task.drift - task.desired_acceleration
+        H[:nv, :nv] += task.jacobian.T @ (w[:, None] * task.jacobian)
+        f[:nv] += task.jacobian.T @ (w * residual)
+    entry = builder._problem()
+    H += np.diag(entry.weights)
+    f -= entry.rate_weights * entry.x_prev
+    tau_rows = entry.tau_block.A
+    offset = c.kinematics.nonlinear_effects[6:] - builder.tau_prev
+    w = c.config.torque_rate_weight
+    H += w * tau_rows.T @ tau_rows
+    f += w * tau_rows.T @ offset
+    np.testing.assert_allclose(full.H, H, atol=1e-9)
+    np.testing.assert_allclose(full.f, f, atol=1e-9)
+    assert {"FR_foot"} == {t.frame for t in builder._active_tasks if hasattr(t, "frame")}
+
+
+def test_a_straight_stance_leg_falls_back_to_the_full_qp(model, standing):
+    c = WholeBodyController()
+    c.reset(standing)
+    q = standing.copy()
+    q[7 + 3 * LEGS.index("RR") + 1] = 0.0
+    q[7 + 3 * LEGS.index("RR") + 2] = 0.0   # knee straight: the leg's Jacobian is singular
+    c.kinematics.update(q, np.zeros(18))
+    c.builder.update()
+    c.builder.assemble()
+    assert not c.builder.reduced
+    out = c.step(q, np.zeros(18))
+    assert np.isfinite(out.tau).all()
+
+
+def test_inverse3():
+    rng = np.random.default_rng(0)
+    L = rng.normal(size=(3, 3))
+    out = np.zeros((3, 3))
+    assert qp_kernel._inverse3(L, out) == pytest.approx(np.linalg.det(L))
+    np.testing.assert_allclose(out, np.linalg.inv(L), atol=1e-12)
+    assert qp_kernel._inverse3(np.ones((3, 3)), out) == 0.0
+
+
+@pytest.fixture
+def standing(description):
+    return description.pose("standing")

@@ -1,10 +1,21 @@
-"""Every task's Jacobian and drift against finite differences, on the configuration manifold."""
+"""Every task's Jacobian and drift against finite differences, on the configuration manifold.
+
+The tasks are updated exactly as the control tick updates them: from a
+:class:`tasks.RobotKinematics` at the state, by their compiled ``update``.
+"""
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from tasks import BaseOrientationTask, ComTask, ContactTask, FramePositionTask, PostureTask
+from tasks import (
+    BaseOrientationTask,
+    ComTask,
+    ContactTask,
+    FramePositionTask,
+    PostureTask,
+    RobotKinematics,
+)
 from tests.conftest import random_configuration
 from wbc.errors import ConfigurationError, NonFiniteError
 
@@ -12,11 +23,19 @@ H = 1e-6
 N_SAMPLES = 10
 
 
-def updated(model, data, q, v):
-    pin.computeAllTerms(model, data, q, v)
-    pin.updateFramePlacements(model, data)
-    pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
-    return data
+FRAMES = ("FL_foot", "FR_foot", "RL_foot", "RR_foot", "base")
+
+
+def updated(model, q, v):
+    """Kinematics at (q, v), as the controller computes them each tick."""
+    kinematics = RobotKinematics(model, FRAMES)
+    kinematics.update(q, v)
+    return kinematics
+
+
+def bound(task, model):
+    task.bind(RobotKinematics(model, FRAMES))
+    return task
 
 
 def samples(model, seed):
@@ -34,16 +53,14 @@ def velocity_fd(value, model, q, v):
 def drift_fd(task, model, q, v):
     """d/dt (J(q(t)) v) along q(t) = q (+) t v with constant v (qdd = 0)."""
     def task_velocity(qq):
-        data = updated(model, model.createData(), qq, v)
-        task.update(model, data, qq, v)
+        task.update(updated(model, qq, v))
         return task.jacobian @ v
     return velocity_fd(task_velocity, model, q, v)
 
 
 def check(task, value, model, seed):
     for q, v in samples(model, seed):
-        data = updated(model, model.createData(), q, v)
-        task.update(model, data, q, v)
+        task.update(updated(model, q, v))
         J, drift = task.jacobian.copy(), task.drift.copy()
         np.testing.assert_allclose(J @ v, velocity_fd(value, model, q, v), atol=1e-5, rtol=1e-5)
         np.testing.assert_allclose(drift, drift_fd(task, model, q, v), atol=1e-4, rtol=1e-4)
@@ -57,7 +74,7 @@ def test_com_task(model):
 
 @pytest.mark.parametrize("frame,axes", [("FR_foot", "xyz"), ("RL_foot", "xz"), ("base", "z")])
 def test_frame_position_task(model, frame, axes):
-    task = FramePositionTask(model, frame, axes=axes)
+    task = bound(FramePositionTask(model, frame, axes=axes), model)
     task.set_target(np.zeros(len(axes)))
     rows = ["xyz".index(a) for a in axes]
 
@@ -71,15 +88,14 @@ def test_frame_position_task(model, frame, axes):
 def test_base_orientation_task(model):
     task = BaseOrientationTask()
     for q, v in samples(model, 2):
-        data = updated(model, model.createData(), q, v)
-        task.update(model, data, q, v)
+        task.update(updated(model, q, v))
         R = pin.Quaternion(q[3:7]).matrix()
         R_next = pin.Quaternion(pin.integrate(model, q, H * v)[3:7]).matrix()
         np.testing.assert_allclose(task.jacobian @ v, pin.log3(R.T @ R_next) / H, atol=1e-5)
         np.testing.assert_allclose(task.drift, drift_fd(task, model, q, v), atol=1e-6)
         # The error is the rotation from the current to the target orientation, base frame.
         task.set_target(R_next)
-        task.update(model, data, q, v)
+        task.update(updated(model, q, v))
         np.testing.assert_allclose(task.error, H * (task.jacobian @ v), atol=1e-9)
 
 
@@ -92,10 +108,11 @@ def test_posture_task(model):
 @pytest.mark.parametrize("radius", [0.0, 0.022])
 def test_contact_task_rolling_point(model, radius):
     frames = ["FL_foot", "FR_foot", "RL_foot", "RR_foot"]
-    task = ContactTask(model, frames, radius_m=radius)
+    task = bound(ContactTask(model, frames, radius_m=radius), model)
     for q, v in samples(model, 4):
-        data = updated(model, model.createData(), q, v)
-        task.update(model, data, q, v)
+        task.update(updated(model, q, v))
+        data = model.createData()
+        pin.framesForwardKinematics(model, data, q)
         # The body point under each sphere centre at this instant.
         points = []
         for name in frames:
@@ -118,11 +135,12 @@ def test_desired_acceleration_is_pd_with_critical_damping(model):
     assert task.kd == pytest.approx(20.0)
     q = random_configuration(model, np.random.default_rng(5))
     v = np.random.default_rng(6).normal(size=18)
-    data = updated(model, model.createData(), q, v)
-    task.set_target(data.com[0] + [0.01, 0.0, 0.0], velocity=[0.1, 0.0, 0.0])
+    kinematics = updated(model, q, v)
+    task.set_target(kinematics.com_position + [0.01, 0.0, 0.0], velocity=[0.1, 0.0, 0.0])
     task.set_feedforward([0.0, 0.0, 1.0])
-    task.update(model, data, q, v)
-    expected = 100.0 * np.array([0.01, 0, 0]) + 20.0 * (np.array([0.1, 0, 0]) - data.vcom[0])
+    task.update(kinematics)
+    expected = (100.0 * np.array([0.01, 0, 0])
+                + 20.0 * (np.array([0.1, 0, 0]) - kinematics.com_velocity))
     np.testing.assert_allclose(task.desired_acceleration, expected + [0, 0, 1.0], atol=1e-12)
 
 
@@ -141,9 +159,10 @@ def test_targets_are_copied_and_validated(model):
 
 def test_task_without_target_says_so(model):
     task = ComTask()
-    data = updated(model, model.createData(), random_configuration(model, np.random.default_rng(0)), np.zeros(18))
+    kinematics = updated(model, random_configuration(model, np.random.default_rng(0)),
+                         np.zeros(18))
     with pytest.raises(ConfigurationError, match="ComTask: target not set; call set_target"):
-        task.update(model, data, np.zeros(19), np.zeros(18))
+        task.update(kinematics)
 
 
 def test_bad_task_parameters(model):

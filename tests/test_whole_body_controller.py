@@ -8,7 +8,7 @@ from tests.conftest import random_configuration
 from wbc import ControllerConfig, WholeBodyController
 from wbc.backends import available_backends
 from wbc.control_output import ControlStatus
-from tasks import ContactTask
+from tasks import ContactTask, RobotKinematics
 from wbc.description import FOOT_RADIUS_M, LEGS
 from wbc.errors import ConfigurationError, NonFiniteError, ReachabilityError, UnknownNameError
 
@@ -35,11 +35,14 @@ def check_solution(c, q, v, out, swing=()):
     """Dynamics, contacts, friction, force bounds and torque limits, independently checked."""
     model, data = c.model, c.model.createData()
     qdd, forces = out.qdd, out.forces
-    pin.computeAllTerms(model, data, q, v)
-    pin.updateFramePlacements(model, data)
-    # The reference contact model: the task class, checked against finite differences.
-    contact = ContactTask(model, [f"{leg}_foot" for leg in LEGS], radius_m=FOOT_RADIUS_M)
-    contact.update(model, data, q, v)
+    # The reference contact model: the task class, checked against finite differences,
+    # on kinematics of its own.
+    feet = [f"{leg}_foot" for leg in LEGS]
+    contact = ContactTask(model, feet, radius_m=FOOT_RADIUS_M)
+    kinematics = RobotKinematics(model, feet)
+    kinematics.update(q, v)
+    contact.bind(kinematics)
+    contact.update(kinematics)
     contact_jac = contact.jacobian
     # Full inverse dynamics: M qdd + h - J^T f = [0 (base); tau (joints)].
     generalized = pin.rnea(model, data, q, v, qdd) - contact_jac.T @ forces.reshape(-1)
@@ -181,6 +184,8 @@ def test_backends_agree_with_daqp(backend, standing, model):
     for q, v in perturbed_states(model, standing, 3, seed=2):
         a, b = reference.step(q, v), other.step(q, v)
         assert a.ok and b.ok, b.message
-        np.testing.assert_allclose(b.tau_ff, a.tau_ff, atol=1e-3)
+        # OSQP (first order, polished) lands within 10 mN m of DAQP on the reduced QP.
+        atol = 1e-2 if "osqp" in backend else 1e-3
+        np.testing.assert_allclose(b.tau_ff, a.tau_ff, atol=atol)
         eq, ineq = other.problem.violations(other.last_solution)
         assert eq < 1e-5 and ineq < 1e-5

@@ -34,6 +34,8 @@ _LAZY = {
     "SdkLowState": "wbc.unitree_sdk",
     "SdkMotorCommand": "wbc.unitree_sdk",
     "PlacoController": "wbc.placo_controller",
+    "ProblemBuilder": "wbc.problem_builder",
+    "Regularization": "wbc.problem_builder",
     "SupportPolygon": "wbc.support_polygon",
     "available_backends": "wbc.backends",
 }

@@ -66,6 +66,20 @@ class JointReference:
         """
         self._anchored = False
 
+    def prepare(self, q: np.ndarray, dq: np.ndarray, dt: float) -> np.ndarray:
+        """Anchor at the measured state if released; the per-joint decay factors for ``dt``.
+
+        The first half of :meth:`advance`, for callers that integrate in compiled code.
+        """
+        if not self._anchored:
+            self.reset(q, dq)
+        if dt != self._keep_dt:  # the modes or the period changed: not on every tick
+            leaking = self._leak_time > 0.0
+            self._keep[:] = 1.0
+            self._keep[leaking] = np.maximum(0.0, 1.0 - dt / self._leak_time[leaking])
+            self._keep_dt = dt
+        return self._keep
+
     def advance(self, q: np.ndarray, dq: np.ndarray, qdd: np.ndarray, dt: float) -> None:
         """Integrate the joint accelerations ``qdd`` [rad/s^2] over ``dt`` [s], then bound.
 
@@ -75,15 +89,8 @@ class JointReference:
             qdd: The QP's joint accelerations [rad/s^2].
             dt: Control period [s].
         """
-        if not self._anchored:
-            self.reset(q, dq)
+        keep = self.prepare(q, dq, dt)
         q_des, dq_des, offset = self.q_des, self.dq_des, self._offset
-        if dt != self._keep_dt:  # the modes or the period changed: not on every tick
-            leaking = self._leak_time > 0.0
-            self._keep[:] = 1.0
-            self._keep[leaking] = np.maximum(0.0, 1.0 - dt / self._leak_time[leaking])
-            self._keep_dt = dt
-        keep = self._keep
         q_des -= q
         q_des *= keep
         q_des += q

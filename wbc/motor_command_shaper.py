@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from wbc.controller_config import ControllerConfig
@@ -11,6 +12,28 @@ from wbc.joint_reference import JointReference
 _NJ = 12
 #: Joint-type index (0 hip, 1 thigh, 2 calf) of each joint, description order.
 _JOINT_TYPE = np.tile(np.arange(3), len(LEGS))
+
+
+@numba.njit(cache=True)
+def _shape(q, dq, qdd, tau_qp, dt, keep, max_position_error, max_velocity_error, q_ref,
+           dq_ref, damping, friction, velocity_scale, tau_max, kp, kd, effort_limit, out):
+    """Advance the joint reference (as :meth:`JointReference.advance`) and fill the command
+    rows ``out = [q_des, dq_des, kp, kd, tau_ff, tau]`` (6, n)."""
+    for i in range(q.size):
+        qr = q[i] + keep[i] * (q_ref[i] - q[i])
+        dqr = dq[i] + keep[i] * (dq_ref[i] - dq[i]) + dt * qdd[i]
+        dqr = dq[i] + min(max(dqr - dq[i], -max_velocity_error), max_velocity_error)
+        qr += dt * dqr
+        qr = q[i] + min(max(qr - q[i], -max_position_error), max_position_error)
+        q_ref[i], dq_ref[i] = qr, dqr
+        tau_ff = tau_qp[i]
+        if damping[i] != 0.0 or friction[i] != 0.0:
+            tau_ff += damping[i] * dqr + friction[i] * np.tanh(dqr / velocity_scale)
+            tau_ff = min(max(tau_ff, -tau_max[i]), tau_max[i])
+        tau = tau_ff + kp[i] * (qr - q[i]) + kd[i] * (dqr - dq[i])
+        out[0, i], out[1, i], out[2, i], out[3, i] = qr, dqr, kp[i], kd[i]
+        out[4, i] = tau_ff
+        out[5, i] = min(max(tau, -effort_limit[i]), effort_limit[i])
 
 
 class MotorCommandShaper:
@@ -41,7 +64,6 @@ class MotorCommandShaper:
         self.effort_limit = effort_limit
         self._damping = np.asarray(config.known_joint_damping)[_JOINT_TYPE]
         self._friction = np.asarray(config.known_joint_friction)[_JOINT_TYPE]
-        self._compensate = bool(self._damping.any() or self._friction.any())
         self.kp = np.full(_NJ, config.stance_kp)
         self.kd = np.full(_NJ, config.stance_kd)
 
@@ -64,16 +86,12 @@ class MotorCommandShaper:
             qdd: The QP's joint accelerations [rad/s^2] (12,).
             tau_qp: The QP's joint torques [N m] (12,).
         """
-        reference = self.reference
-        reference.advance(q, dq, qdd, self.config.control_period_s)
-        q_des, dq_des = reference.q_des.copy(), reference.dq_des.copy()
-        tau_ff = tau_qp.copy()
-        if self._compensate:
-            tau_ff += self._damping * dq_des
-            tau_ff += self._friction * np.tanh(dq_des / self.config.friction_velocity_scale_rad_s)
-            np.clip(tau_ff, -self.tau_max, self.tau_max, out=tau_ff)
-        kp, kd = self.kp.copy(), self.kd.copy()
-        tau = tau_ff + kp * (q_des - q) + kd * (dq_des - dq)
-        np.clip(tau, -self.effort_limit, self.effort_limit, out=tau)
-        return {"q_des": q_des, "dq_des": dq_des, "kp": kp, "kd": kd, "tau_ff": tau_ff,
-                "tau": tau}
+        reference, cfg = self.reference, self.config
+        keep = reference.prepare(q, dq, cfg.control_period_s)
+        out = np.empty((6, _NJ))  # the command owns its arrays: one block, six views
+        _shape(q, dq, qdd, tau_qp, cfg.control_period_s, keep, reference.max_position_error,
+               reference.max_velocity_error, reference.q_des, reference.dq_des, self._damping,
+               self._friction, cfg.friction_velocity_scale_rad_s, self.tau_max, self.kp,
+               self.kd, self.effort_limit, out)
+        return {"q_des": out[0], "dq_des": out[1], "kp": out[2], "kd": out[3],
+                "tau_ff": out[4], "tau": out[5]}

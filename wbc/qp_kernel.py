@@ -1,245 +1,324 @@
-"""The control tick's task terms and QP assembly, fused in one compiled function.
+"""Compiled stages of the QP builder: stacking task costs, and the contact-consistent reduction.
 
-At this size (31 variables, 50 rows) a NumPy assembly spends its time in Python overhead,
-about 1 to 3 microseconds per small array operation, not in arithmetic. numba compiles the
-same arithmetic to one machine-code function, called once per tick. The formulas are those
-of the task classes in :mod:`tasks` (the reference, tested against finite differences);
-``tests/test_qp_kernel.py`` checks that this function and the task classes agree.
-
-Variable layout ``x = [qdd (18), f (4 x 3), s]``; row layout: floating-base dynamics (6),
-stance contacts (12), torque limits (12), friction (16), support polygon (4).
+Each function is one stage over arrays allocated once per variable layout; none allocates.
+The reduction eliminates the floating-base equations of motion and the stance contacts:
+with each stance leg's 3x3 contact Jacobian ``L_i`` invertible, the stance joints'
+accelerations follow from the base's, ``qdd_i = L_i^-1 (rhs_i - B_i qdd_b)``, and the base's
+from the free variables through the six floating-base rows, ``K qdd_b = r0 + E z``. Every
+decision variable is then affine in ``z = [swing joints' qdd, contact forces, slacks]``:
+``x = T z + t0``, so the QP keeps about 13 variables and no equality rows.
 """
 
 from __future__ import annotations
 
 import numba
-import numpy as np
 
-NV, NJ, NC = 18, 12, 4
-F0 = NV                # first force variable
-S = NV + 3 * NC        # support-polygon slack
-N = S + 1              # variables
-DYN, CON, TAU, FRIC, SUP = 0, 6, 18, 30, 46
-M_ROWS = 50
 INF = 1e30
-#: Velocity columns moving each foot: the floating base and the leg's three joints.
-LEG_COLUMNS = np.array([[0, 1, 2, 3, 4, 5, 6 + 3 * i, 7 + 3 * i, 8 + 3 * i] for i in range(NC)])
+#: Below this |determinant| (or pivot) the reduction declines and the full QP is solved.
+SINGULAR = 1e-9
 
 
 @numba.njit(cache=True)
-def log3(R: np.ndarray) -> np.ndarray:
-    """Rotation vector of a rotation matrix (the inverse of Rodrigues' formula)."""
-    cos = min(1.0, max(-1.0, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)))
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    # atan2 stays accurate near 0 and pi, where arccos of the trace does not.
-    angle = np.arctan2(0.5 * np.sqrt(w @ w), cos)
-    if angle < 1e-6:
-        return 0.5 * w
-    if np.pi - angle < 1e-6:  # at pi the antisymmetric part vanishes: use the symmetric
-        axis = np.sqrt(np.maximum(0.0, (np.diag(R) - cos) / (1.0 - cos)))
-        k = np.argmax(axis)
-        for i in range(3):
-            if i != k:
-                axis[i] = np.copysign(axis[i], R[k, i] + R[i, k])
-        if axis @ w < 0.0:  # what is left of the antisymmetric part gives the sign
-            axis = -axis
-        return angle * axis / np.linalg.norm(axis)
-    return angle / (2.0 * np.sin(angle)) * w
-
-
-@numba.njit(cache=True)
-def add_least_squares(H, f, J, residual, weight):
-    """``H += w J^T J`` and ``f += w J^T residual`` on the leading block, in place."""
-    rows, cols = J.shape
-    for i in range(cols):
-        s = 0.0
-        for r in range(rows):
-            s += J[r, i] * residual[r]
-        f[i] += weight * s
-        for j in range(i, cols):
-            s = 0.0
-            for r in range(rows):
-                s += J[r, i] * J[r, j]
-            H[i, j] += weight * s
-            if j != i:
-                H[j, i] += weight * s
-
-
-@numba.njit(cache=True)
-def assemble(M, h, J, Jcom, com, vcom, acom, R, q, v,
-             foot_pos, foot_acc, stance, radius, contact_kd,
-             com_ref, com_gains, R_target, base_ref, base_gains, base_error,
-             posture_ref, posture_gains, posture_weights,
-             foot_ref, foot_gains,
-             normals, offsets, n_edges, omega,
-             tau_max, q_low, q_high, v_max, horizon,
-             h_const, rate_weights, x_prev, tau_prev, torque_rate_weight,
-             H, f, A, lower, upper, lb, ub, jc, errors, work_ms, work_foot_jac):
-    """Fill the QP (``H, f, A, lower, upper`` and the joint rows of ``lb, ub``) for one tick.
+def accumulate_tasks(J, drift, desired, row_weights, row_task, gains, active, T, t0, H, f, g):
+    """``H += w (J T)^T (J T)``, ``f += w (J T)^T (J t0 + drift - desired)`` per task row.
 
     Args:
-        M: Mass matrix (upper triangle used). h: nonlinear effects. J: joint Jacobians in
-            the world frame (``data.J``). Jcom, com, vcom, acom: centre-of-mass terms
-            (``acom`` at zero acceleration). R: base rotation. q, v: state.
-        foot_pos (4, 3), foot_acc (4, 6): foot frame positions and classical accelerations
-            (linear, angular; world axes) at zero joint acceleration.
-        stance (4,): stance flags. radius: foot sphere radius. contact_kd: contact damping.
-        com_ref (3, 3): target position, velocity, feed-forward. com_gains: kp, kd, weight.
-        R_target: base orientation target; base_ref (3, 3): its target angular velocity
-            and feed-forward in rows 1 and 2 (base frame); base_gains: kp, kd, weight;
-            base_error (3,): written with the orientation error (for integral action).
-        posture_ref (3, 12), posture_gains, posture_weights (12): same for the joints.
-        foot_ref (4, 3, 3), foot_gains (4, 3): same per foot (used for swing feet).
-        normals (4, 2), offsets (4,), n_edges, omega: support polygon barrier.
-        tau_max, q_low, q_high, v_max, horizon: limits.
-        h_const, rate_weights (30,), x_prev (30,): constant cost and smoothing.
-        tau_prev (12,), torque_rate_weight: cost ``w |tau(x) - tau_prev|^2`` on the torque
-            change from the previous tick, ``tau(x) = S x + h_a`` (S: the torque rows of A).
-        H, f, A, lower, upper, lb, ub: the QP, written in place.
-        jc (12, 18): scratch for the rolling-contact Jacobians (they end up in ``A``).
-        errors (7,): written with error norms: com, base, posture, then the four feet.
-        work_ms (18, 18), work_foot_jac (4, 6, 18): scratch space, allocated once by the
-            caller (no allocation in the tick).
+        J (R, nv), drift (R,), desired (R,), row_weights (R,): the stacked task rows.
+        row_task (R,): the task of each row; gains (tasks, 3): kp, kd, weight per task;
+            active (tasks,): which tasks are in the QP.
+        T (n, nz), t0 (n,): the map from the QP's variables to ``x`` (its first nv entries
+            are ``qdd``).
+        H (nz, nz), f (nz,): accumulated (upper triangle of ``H``).
+        g (nz,): scratch.
     """
-    # Symmetric mass matrix from its upper triangle.
-    Ms = work_ms
-    for i in range(NV):
-        for j in range(i, NV):
-            Ms[i, j] = M[i, j]
-            Ms[j, i] = M[i, j]
-
-    # Foot Jacobians (world-aligned, at the frame origin) from the joint Jacobians.
-    foot_jac = work_foot_jac
-    foot_jac[:, :, :] = 0.0
-    for i in range(NC):
-        p = foot_pos[i]
-        for c in LEG_COLUMNS[i]:
-            wx, wy, wz = J[3, c], J[4, c], J[5, c]
-            foot_jac[i, 0, c] = J[0, c] + wy * p[2] - wz * p[1]
-            foot_jac[i, 1, c] = J[1, c] + wz * p[0] - wx * p[2]
-            foot_jac[i, 2, c] = J[2, c] + wx * p[1] - wy * p[0]
-            foot_jac[i, 3, c] = wx
-            foot_jac[i, 4, c] = wy
-            foot_jac[i, 5, c] = wz
-
-    # Rolling contact points: J = J_lin - [d]x J_ang, d = (0, 0, -r).
-    for i in range(NC):
-        for k in range(NV):
-            jc[3 * i, k] = foot_jac[i, 0, k] - radius * foot_jac[i, 4, k]
-            jc[3 * i + 1, k] = foot_jac[i, 1, k] + radius * foot_jac[i, 3, k]
-            jc[3 * i + 2, k] = foot_jac[i, 2, k]
-        drift0 = foot_acc[i, 0] - radius * foot_acc[i, 4]
-        drift1 = foot_acc[i, 1] + radius * foot_acc[i, 3]
-        drift2 = foot_acc[i, 2]
-        for a, drift in ((0, drift0), (1, drift1), (2, drift2)):
-            row = 3 * i + a
-            vel = 0.0
-            for k in range(NV):
-                vel += jc[row, k] * v[k]
-            rhs = -contact_kd * vel - drift
-            if stance[i]:
-                lower[CON + row] = rhs
-                upper[CON + row] = rhs
-            else:
-                lower[CON + row] = -INF
-                upper[CON + row] = INF
-
-    # Equations of motion (floating base), stance contacts, torque limits.
-    A[DYN:DYN + 6, :NV] = Ms[:6]
-    A[TAU:TAU + NJ, :NV] = Ms[6:]
-    for r in range(3 * NC):
-        for k in range(6):
-            A[DYN + k, F0 + r] = -jc[r, k]
-        for k in range(NJ):
-            A[TAU + k, F0 + r] = -jc[r, 6 + k]
-    for k in range(6):
-        lower[DYN + k] = -h[k]
-        upper[DYN + k] = -h[k]
-    A[CON:CON + 3 * NC, :NV] = jc
-    for k in range(NJ):
-        lower[TAU + k] = -tau_max[k] - h[6 + k]
-        upper[TAU + k] = tau_max[k] - h[6 + k]
-
-    # Centre of mass inside the support polygon: a soft, critically damped barrier.
-    for e in range(4):
-        row = SUP + e
-        if e < n_edges:
-            nx, ny = normals[e, 0], normals[e, 1]
-            for k in range(NV):
-                A[row, k] = nx * Jcom[0, k] + ny * Jcom[1, k]
-            distance = nx * com[0] + ny * com[1] - offsets[e]
-            lower[row] = -(nx * (acom[0] + 2.0 * omega * vcom[0])
-                           + ny * (acom[1] + 2.0 * omega * vcom[1])) - omega * omega * distance
-            upper[row] = INF
-        else:
-            A[row, :NV] = 0.0
-            lower[row] = -INF
-            upper[row] = INF
-
-    # Joint limits as acceleration bounds over the horizon; velocity limits.
-    for k in range(NJ):
-        qj, vj = q[7 + k], v[6 + k]
-        hi = min(2.0 * (q_high[k] - qj - vj * horizon) / (horizon * horizon),
-                 (v_max[k] - vj) / horizon)
-        lo = max(2.0 * (q_low[k] - qj - vj * horizon) / (horizon * horizon),
-                 (-v_max[k] - vj) / horizon)
-        lb[6 + k] = min(lo, hi)
-        ub[6 + k] = hi
-
-    # Cost.
-    H[:, :] = h_const
-    f[:] = 0.0
-    # Centre of mass: weight * |Jcom qdd + acom - a_des|^2.
-    kp, kd, w = com_gains[0], com_gains[1], com_gains[2]
-    residual = np.empty(3)
-    total = 0.0
-    for a in range(3):
-        e = com_ref[0, a] - com[a]
-        residual[a] = acom[a] - (kp * e + kd * (com_ref[1, a] - vcom[a]) + com_ref[2, a])
-        total += e * e
-    add_least_squares(H, f, Jcom, residual, w)
-    errors[0] = np.sqrt(total)
-    # Base orientation: the Jacobian selects v[3:6], the drift is zero.
-    kp, kd, w = base_gains[0], base_gains[1], base_gains[2]
-    err = log3(R.T @ R_target)
-    base_error[:] = err
-    for k in range(3):
-        H[3 + k, 3 + k] += w
-        f[3 + k] -= w * (kp * err[k] + kd * (base_ref[1, k] - v[3 + k]) + base_ref[2, k])
-    errors[1] = np.sqrt(np.sum(err * err))
-    # Posture: the Jacobian selects the joints.
-    kp, kd, w = posture_gains[0], posture_gains[1], posture_gains[2]
-    total = 0.0
-    for k in range(NJ):
-        e = posture_ref[0, k] - q[7 + k]
-        wk = w * posture_weights[k]
-        H[6 + k, 6 + k] += wk
-        f[6 + k] -= wk * (kp * e + kd * (posture_ref[1, k] - v[6 + k]) + posture_ref[2, k])
-        total += e * e
-    errors[2] = np.sqrt(total)
-    # Swing feet: position tasks on the foot frames.
-    for i in range(NC):
-        errors[3 + i] = 0.0
-        if stance[i]:
+    nz = T.shape[1]
+    nv = J.shape[1]
+    for r in range(J.shape[0]):
+        t = row_task[r]
+        if not active[t]:
             continue
-        kp, kd, w = foot_gains[i, 0], foot_gains[i, 1], foot_gains[i, 2]
-        Jf = foot_jac[i, :3]
-        total = 0.0
+        w = gains[t, 2] * row_weights[r]
+        if w == 0.0:
+            continue
+        g[:] = 0.0
+        residual = drift[r] - desired[r]
+        for k in range(nv):
+            a = J[r, k]
+            if a != 0.0:
+                residual += a * t0[k]
+                for j in range(nz):
+                    g[j] += a * T[k, j]
+        for i in range(nz):
+            wg = w * g[i]
+            if wg != 0.0:
+                f[i] += wg * residual
+                for j in range(i, nz):
+                    H[i, j] += wg * g[j]
+
+
+@numba.njit(cache=True)
+def add_diagonal_cost(weights, rate_weights, x_prev, T, t0, H, f):
+    """Cost ``1/2 sum_k weights_k x_k^2 - rate_weights_k x_prev_k x_k`` with ``x = T z + t0``.
+
+    ``weights`` holds the regularisation plus the rate weights, so with ``rate_weights``
+    this is ``1/2 |x|^2_reg + 1/2 |x - x_prev|^2_rate`` up to a constant.
+    """
+    nz = T.shape[1]
+    for k in range(T.shape[0]):
+        d = weights[k]
+        c = d * t0[k] - rate_weights[k] * x_prev[k]
+        for i in range(nz):
+            tki = T[k, i]
+            if tki == 0.0:
+                continue
+            f[i] += tki * c
+            if d != 0.0:
+                dt = d * tki
+                for j in range(i, nz):
+                    H[i, j] += dt * T[k, j]
+
+
+@numba.njit(cache=True)
+def add_row_least_squares(A, offset, target, weight, H, f):
+    """``H += w A^T A``, ``f += w A^T (offset - target)``: the cost ``w/2 |A z + offset - target|^2``."""
+    nz = A.shape[1]
+    for r in range(A.shape[0]):
+        residual = offset[r] - target[r]
+        for i in range(nz):
+            wa = weight * A[r, i]
+            if wa != 0.0:
+                f[i] += wa * residual
+                for j in range(i, nz):
+                    H[i, j] += wa * A[r, j]
+
+
+@numba.njit(cache=True)
+def mirror_upper(H):
+    """Copy the upper triangle of ``H`` onto the lower one."""
+    n = H.shape[0]
+    for i in range(n):
+        for j in range(i + 1, n):
+            H[j, i] = H[i, j]
+
+
+@numba.njit(cache=True)
+def reduce_rows(A, lower, upper, rows, T, t0, A_r, lower_r, upper_r, offset):
+    """Rows ``rows`` of ``lower <= A x <= upper`` in terms of ``z``: ``A T z + A t0``.
+
+    Writes ``A_r = A T``, the bounds less ``A t0`` (infinite bounds stay infinite) and the
+    offsets ``A t0`` (the torque rows' offsets give the torques).
+    """
+    n, nz = T.shape
+    for idx in range(rows.size):
+        r = rows[idx]
+        A_r[idx, :] = 0.0
+        off = 0.0
+        for k in range(n):
+            a = A[r, k]
+            if a != 0.0:
+                off += a * t0[k]
+                for j in range(nz):
+                    A_r[idx, j] += a * T[k, j]
+        offset[idx] = off
+        lower_r[idx] = lower[r] - off if lower[r] > -INF else -INF
+        upper_r[idx] = upper[r] - off if upper[r] < INF else INF
+
+
+@numba.njit(cache=True)
+def reduce_bounds(lb, ub, z_of_x, bounded, T, t0, lb_z, ub_z, A_r, lower_r, upper_r):
+    """Bounds on ``x``: simple bounds on ``z`` where ``x_k`` is a variable of ``z``, rows
+    ``T_k z`` for the columns ``bounded`` (the stance joints' accelerations)."""
+    for k in range(z_of_x.size):
+        j = z_of_x[k]
+        if j >= 0:
+            lb_z[j] = lb[k]
+            ub_z[j] = ub[k]
+    for idx in range(bounded.size):
+        k = bounded[idx]
+        A_r[idx, :] = T[k, :]
+        lower_r[idx] = lb[k] - t0[k] if lb[k] > -INF else -INF
+        upper_r[idx] = ub[k] - t0[k] if ub[k] < INF else INF
+
+
+@numba.njit(cache=True)
+def _inverse3(L, out):
+    """``out = L^-1`` for a 3x3 matrix; returns its determinant (0: left unwritten)."""
+    det = (L[0, 0] * (L[1, 1] * L[2, 2] - L[1, 2] * L[2, 1])
+           - L[0, 1] * (L[1, 0] * L[2, 2] - L[1, 2] * L[2, 0])
+           + L[0, 2] * (L[1, 0] * L[2, 1] - L[1, 1] * L[2, 0]))
+    if abs(det) < SINGULAR:
+        return 0.0
+    inv = 1.0 / det
+    out[0, 0] = (L[1, 1] * L[2, 2] - L[1, 2] * L[2, 1]) * inv
+    out[0, 1] = (L[0, 2] * L[2, 1] - L[0, 1] * L[2, 2]) * inv
+    out[0, 2] = (L[0, 1] * L[1, 2] - L[0, 2] * L[1, 1]) * inv
+    out[1, 0] = (L[1, 2] * L[2, 0] - L[1, 0] * L[2, 2]) * inv
+    out[1, 1] = (L[0, 0] * L[2, 2] - L[0, 2] * L[2, 0]) * inv
+    out[1, 2] = (L[0, 2] * L[1, 0] - L[0, 0] * L[1, 2]) * inv
+    out[2, 0] = (L[1, 0] * L[2, 1] - L[1, 1] * L[2, 0]) * inv
+    out[2, 1] = (L[0, 1] * L[2, 0] - L[0, 0] * L[2, 1]) * inv
+    out[2, 2] = (L[0, 0] * L[1, 1] - L[0, 1] * L[1, 0]) * inv
+    return det
+
+
+@numba.njit(cache=True)
+def contact_consistent_map(M, h, Jc, rhs, loaded, leg_columns, free_columns, force_start,
+                           T, t0, L, Linv, K, X):
+    """Fill ``x = T z + t0`` satisfying the floating-base dynamics and the stance contacts.
+
+    Args:
+        M (nv, nv), h (nv,): mass matrix and nonlinear effects.
+        Jc (3 c, nv), rhs (3 c,): contact Jacobians of all c contacts and ``desired - drift``.
+        loaded (k,): the contacts with force variables (stance); their rows of ``Jc`` touch
+            the base and their own leg's joints ``leg_columns[i]`` (3,) only.
+        free_columns: the acceleration columns that are variables of ``z`` (the other legs'
+            joints), in ``z`` order, followed in ``z`` by the forces and slacks, which are
+            the columns ``force_start..`` of ``x``.
+        T (n, nz), t0 (n,): written.
+        L, Linv (k, 3, 3), K (6, 6), X (6, nz + 1): scratch.
+
+    Returns:
+        False when a leg's contact Jacobian or the reduced base inertia ``K`` is singular
+        (``T`` is then unusable: solve the full QP).
+    """
+    n, nz = T.shape
+    nfree = free_columns.size
+    T[:, :] = 0.0
+    t0[:] = 0.0
+    for j in range(nfree):
+        T[free_columns[j], j] = 1.0
+    for j in range(n - force_start):
+        T[force_start + j, nfree + j] = 1.0
+    # K = M_bb - sum_i M_b,leg_i L_i^-1 B_i and the right-hand side [E | r0].
+    for a in range(6):
+        for b in range(6):
+            K[a, b] = M[a, b]
+        for j in range(nz + 1):
+            X[a, j] = 0.0
+        X[a, nz] = -h[a]
+        for j in range(nfree):
+            X[a, j] = -M[a, free_columns[j]]
+    for idx in range(loaded.size):
+        i = loaded[idx]
+        cols = leg_columns[i]
         for a in range(3):
-            e = foot_ref[i, 0, a] - foot_pos[i, a]
-            vel = 0.0
-            for k in range(NV):
-                vel += Jf[a, k] * v[k]
-            residual[a] = foot_acc[i, a] - (kp * e + kd * (foot_ref[i, 1, a] - vel)
-                                            + foot_ref[i, 2, a])
-            total += e * e
-        add_least_squares(H, f, Jf, residual, w)
-        errors[3 + i] = np.sqrt(total)
-    # Smoothness: a pull towards the previous tick's solution, and on the torque change.
-    for k in range(S):
-        f[k] -= rate_weights[k] * x_prev[k]
-    if torque_rate_weight > 0.0:
-        offset = np.empty(NJ)
-        for k in range(NJ):
-            offset[k] = h[6 + k] - tau_prev[k]
-        add_least_squares(H, f, A[TAU:TAU + NJ, :S], offset, torque_rate_weight)
+            for b in range(3):
+                L[idx, a, b] = Jc[3 * i + a, cols[b]]
+        if _inverse3(L[idx], Linv[idx]) == 0.0:
+            return False
+        for a in range(6):
+            # m = M_b,leg_i[a] L_i^-1 (a row of 3)
+            m0 = m1 = m2 = 0.0
+            for b in range(3):
+                mab = M[a, cols[b]]
+                m0 += mab * Linv[idx, b, 0]
+                m1 += mab * Linv[idx, b, 1]
+                m2 += mab * Linv[idx, b, 2]
+            for b in range(6):
+                K[a, b] -= (m0 * Jc[3 * i, b] + m1 * Jc[3 * i + 1, b] + m2 * Jc[3 * i + 2, b])
+            X[a, nz] -= m0 * rhs[3 * i] + m1 * rhs[3 * i + 1] + m2 * rhs[3 * i + 2]
+            for c in range(3):  # the base wrench of this contact's force: B_i^T f_i
+                X[a, nfree + 3 * idx + c] = Jc[3 * i + c, a]
+    # Solve K Y = X by Gaussian elimination with partial pivoting (6x6, nz + 1 columns).
+    for col in range(6):
+        pivot, best = col, abs(K[col, col])
+        for r in range(col + 1, 6):
+            if abs(K[r, col]) > best:
+                pivot, best = r, abs(K[r, col])
+        if best < SINGULAR:
+            return False
+        if pivot != col:
+            for b in range(6):
+                K[col, b], K[pivot, b] = K[pivot, b], K[col, b]
+            for j in range(nz + 1):
+                X[col, j], X[pivot, j] = X[pivot, j], X[col, j]
+        for r in range(col + 1, 6):
+            factor = K[r, col] / K[col, col]
+            if factor != 0.0:
+                for b in range(col, 6):
+                    K[r, b] -= factor * K[col, b]
+                for j in range(nz + 1):
+                    X[r, j] -= factor * X[col, j]
+    for col in range(5, -1, -1):
+        for j in range(nz + 1):
+            s = X[col, j]
+            for b in range(col + 1, 6):
+                s -= K[col, b] * X[b, j]
+            X[col, j] = s / K[col, col]
+    for a in range(6):
+        for j in range(nz):
+            T[a, j] = X[a, j]
+        t0[a] = X[a, nz]
+    # Stance joints: qdd_i = L_i^-1 (rhs_i - B_i qdd_b).
+    for idx in range(loaded.size):
+        i = loaded[idx]
+        cols = leg_columns[i]
+        for a in range(3):
+            # u = rhs_i - B_i t0_b, and the rows -B_i T_b
+            u0 = rhs[3 * i + a]
+            for b in range(6):
+                u0 -= Jc[3 * i + a, b] * t0[b]
+            X[a, nz] = u0
+            for j in range(nz):
+                s = 0.0
+                for b in range(6):
+                    s -= Jc[3 * i + a, b] * T[b, j]
+                X[a, j] = s
+        for a in range(3):
+            c = cols[a]
+            t0[c] = (Linv[idx, a, 0] * X[0, nz] + Linv[idx, a, 1] * X[1, nz]
+                     + Linv[idx, a, 2] * X[2, nz])
+            for j in range(nz):
+                T[c, j] = (Linv[idx, a, 0] * X[0, j] + Linv[idx, a, 1] * X[1, j]
+                           + Linv[idx, a, 2] * X[2, j])
+    return True
+
+
+@numba.njit(cache=True)
+def expand(T, t0, z, x):
+    """``x = T z + t0``."""
+    n, nz = T.shape
+    for k in range(n):
+        s = t0[k]
+        for j in range(nz):
+            s += T[k, j] * z[j]
+        x[k] = s
+
+
+@numba.njit(cache=True)
+def reduced_problem(M, h, Jc, contact_drift, contact_desired, loaded, leg_columns,
+                    free_columns, force_start, A, lower, upper, lb, ub, kept_rows, z_of_x,
+                    bounded, J, drift, desired, row_weights, row_task, gains, active, weights,
+                    rate_weights, x_prev, tau_first, tau_prev, torque_rate, T, t0, H, f, A_r,
+                    lower_r, upper_r, lb_z, ub_z, offset, rhs, tau_offset, L, Linv, K, X, g):
+    """The whole reduced QP of one tick in one call: the map ``x = T z + t0``, the kept rows
+    and the bounds in ``z``, the task costs, the regularisation and the torque-rate term.
+
+    ``tau_first`` is the first torque-limit row among the reduced rows (-1: none); the
+    torques are then ``A_r[tau rows] z + tau_offset``. Returns False when the map is
+    singular (nothing else is written): solve the full QP instead.
+    """
+    for r in range(rhs.size):
+        rhs[r] = contact_desired[r] - contact_drift[r]
+    if not contact_consistent_map(M, h, Jc, rhs, loaded, leg_columns, free_columns,
+                                  force_start, T, t0, L, Linv, K, X):
+        return False
+    kept = kept_rows.size
+    reduce_rows(A, lower, upper, kept_rows, T, t0, A_r[:kept], lower_r[:kept], upper_r[:kept],
+                offset[:kept])
+    reduce_bounds(lb, ub, z_of_x, bounded, T, t0, lb_z, ub_z, A_r[kept:], lower_r[kept:],
+                  upper_r[kept:])
+    H[:, :] = 0.0
+    f[:] = 0.0
+    accumulate_tasks(J, drift, desired, row_weights, row_task, gains, active, T, t0, H, f, g)
+    add_diagonal_cost(weights, rate_weights, x_prev, T, t0, H, f)
+    if tau_first >= 0:
+        nj = tau_offset.size
+        nv = h.size
+        for k in range(nj):
+            tau_offset[k] = offset[tau_first + k] + h[nv - nj + k]
+        if torque_rate > 0.0:
+            add_row_least_squares(A_r[tau_first:tau_first + nj], tau_offset, tau_prev,
+                                  torque_rate, H, f)
+    mirror_upper(H)
+    return True

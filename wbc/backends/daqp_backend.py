@@ -17,6 +17,8 @@ except ImportError as err:  # pragma: no cover - depends on the machine
     register_missing("daqp", f"package 'daqp' not importable: {err}")
 
 _EQUALITY = 5  # DAQP constraint sense of an equality row
+_ACTIVE = 1    # DAQP sense flag: start with this constraint in the active set
+_LOWER = 2     # DAQP sense flag: ... at its lower bound (negative multiplier)
 _EXIT_FLAGS = {
     1: "optimal", 2: "soft optimal", -1: "infeasible", -2: "cycling", -3: "unbounded",
     -4: "iteration limit", -5: "nonconvex", -6: "overdetermined initial active set",
@@ -35,18 +37,24 @@ class DaqpBackend(QpBackend):
 
     name = "daqp"
 
-    def __init__(self, *, primal_tol: float = 1e-9, iter_limit: int = 1000):
+    def __init__(self, *, primal_tol: float = 1e-9, iter_limit: int = 1000,
+                 hot_start: bool = False):
         """Args:
             primal_tol: Primal feasibility tolerance (constraint violation it accepts).
             iter_limit: Active-set iteration limit.
+            hot_start: Start each solve from the previous solve's active set (DAQP's
+                "active" sense flag), while the problem's structure is unchanged.
         """
         self.settings = {"primal_tol": primal_tol, "iter_limit": iter_limit}
+        self.hot_start = hot_start
         self._sense = np.zeros(0, dtype=np.int32)
+        self._base_sense = np.zeros(0, dtype=np.int32)
         self._structure: tuple[int, int, int] | None = None
 
     def setup(self, problem: QpProblem) -> None:
         self._sense = np.zeros(problem.n + problem.m, dtype=np.int32)
         self._sense[problem.n:][problem.is_equality] = _EQUALITY
+        self._base_sense = self._sense.copy()
         self._structure = (problem.n, problem.m, problem.structure_version)
 
     def solve(self, problem: QpProblem) -> QpResult:
@@ -57,6 +65,12 @@ class DaqpBackend(QpBackend):
                                           problem.blower, self._sense, **self.settings)
         elapsed = time.perf_counter() - start
         found = (exitflag == 1 or exitflag == 2) and math.isfinite(x.sum())
+        if self.hot_start:  # the next solve starts from this active set (a solved one only)
+            np.copyto(self._sense, self._base_sense)
+            if found:
+                lam = info["lam"]
+                self._sense[lam != 0.0] |= _ACTIVE
+                self._sense[lam < 0.0] |= _LOWER
         if found:
             return QpResult(found=True, x=x, solve_time_s=elapsed,
                             iterations=info["iterations"])
@@ -68,3 +82,4 @@ class DaqpBackend(QpBackend):
 
 if daqp is not None:
     register_backend("daqp", DaqpBackend)
+    register_backend("daqp-hot", lambda: DaqpBackend(hot_start=True))

@@ -1,0 +1,67 @@
+"""Base class of the whole-body QP's linear constraints: ``lower <= A x <= upper``, bounds on x."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
+    from tasks.variable_layout import VariableLayout
+
+
+@dataclass
+class ConstraintBlock:
+    """A constraint's share of the QP, views allocated once per variable layout.
+
+    Attributes:
+        A: Its rows of the constraint matrix (rows, n), zero where it writes nothing.
+        lower, upper: Its rows' bounds (``INFINITY`` for none).
+        lb, ub: Bounds on the whole decision vector (n,), shared by every constraint: a
+            constraint writes the entries of the variables it bounds.
+        rows: Where its rows sit in the QP.
+    """
+
+    A: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
+    rows: slice
+
+
+class Constraint:
+    """Linear rows on the decision vector ``x`` of :class:`tasks.VariableLayout`.
+
+    A constraint declares how many rows it needs for a layout (:meth:`rows`), the slack
+    variables it adds (``slacks``) and the frames it reads (``frames``); it writes its
+    entries into a :class:`ConstraintBlock` in place: the constant ones once per layout in
+    :meth:`setup`, the rest every tick in :meth:`update`. ``equality`` rows have
+    ``lower == upper``. ``name`` names the group in failure diagnoses.
+    """
+
+    #: Group name, e.g. ``"torque limits"``.
+    name: str = ""
+    #: Whether the rows are equalities.
+    equality: bool = False
+    #: Slack variables this constraint adds to the layout.
+    slacks: tuple[str, ...] = ()
+    #: Frames whose kinematics the constraint reads.
+    frames: tuple[str, ...] = ()
+
+    def rows(self, layout: VariableLayout) -> int:
+        """Number of rows for ``layout``."""
+        raise NotImplementedError(f"{type(self).__name__}.rows")
+
+    def bind(self, kinematics: RobotKinematics) -> None:
+        """Resolve frames in the kinematics (called when a controller registers it)."""
+
+    def setup(self, layout: VariableLayout, block: ConstraintBlock) -> None:
+        """Write the entries that depend on the layout only (once per layout)."""
+
+    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
+               block: ConstraintBlock) -> None:
+        """Write this tick's entries at the last state."""
+        raise NotImplementedError(f"{type(self).__name__}.update")

@@ -1,0 +1,43 @@
+"""Joint torque limits on the torques the accelerations and contact forces imply."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from tasks import constraint_kernels
+from tasks.constraint import Constraint, ConstraintBlock
+from tasks.contact_task import ContactTask
+from tasks.variable_layout import VariableLayout
+from wbc.validation import as_vector
+
+if TYPE_CHECKING:
+    from tasks.kinematics import RobotKinematics
+
+
+class TorqueLimits(Constraint):
+    """``-tau_max <= M_a qdd + h_a - J_a^T f <= tau_max`` on the actuated joints.
+
+    Its rows are also how the controller recovers the torques: ``tau = A_rows x + h_a``.
+    """
+
+    name = "torque limits"
+
+    def __init__(self, contacts: ContactTask, tau_max: np.ndarray):
+        """Args:
+            contacts: The contact points' task (its Jacobian maps the forces to torques).
+            tau_max: Torque limit of each actuated joint [N m] (nv - 6,).
+        """
+        self.contacts = contacts
+        self.tau_max = as_vector("tau_max", tau_max, contacts.nv - 6)
+
+    def rows(self, layout: VariableLayout) -> int:
+        return layout.nv - 6
+
+    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
+               block: ConstraintBlock) -> None:
+        constraint_kernels.equation_of_motion_rows(
+            kinematics.mass_matrix, kinematics.nonlinear_effects, self.contacts.jacobian,
+            layout.loaded, layout.force_columns, 6, block.A, block.lower, block.upper,
+            self.tau_max)

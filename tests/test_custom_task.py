@@ -1,0 +1,90 @@
+"""A task written in user code joins the QP and changes the motion; the tick stays correct."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from tasks import RobotKinematics, Task
+from tests.conftest import random_configuration
+from wbc import WholeBodyController
+from wbc.errors import ConfigurationError
+
+_PATH = Path(__file__).resolve().parents[1] / "examples" / "custom_task.py"
+_SPEC = importlib.util.spec_from_file_location("custom_task_example", _PATH)
+example = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(example)
+
+
+def test_the_example_task_raises_the_base_on_the_default_plant():
+    summary = example.run(raise_m=0.04, ramp_s=0.5, settle_s=0.5)
+    assert summary["failures"] == 0
+    assert summary["max_violation"] < 1e-6
+    assert abs(summary["end_m"] - summary["target_m"]) < 0.004
+    # Without the task the same script leaves the base where it was.
+    control = example.run(raise_m=0.04, ramp_s=0.5, settle_s=0.5, with_task=False)
+    assert control["failures"] == 0
+    assert abs(control["end_m"] - control["start_m"]) < 0.003
+
+
+def test_the_example_task_jacobian_and_drift_against_finite_differences(model):
+    task = example.BaseHeightTask()
+    task.set_target(0.3)
+    kinematics = RobotKinematics(model, ("base",))
+    task.bind(kinematics)
+    rng = np.random.default_rng(0)
+    h = 1e-6
+    for _ in range(5):
+        q = random_configuration(model, rng, scale=0.5)
+        v = rng.normal(size=model.nv)
+
+        def height(qq):
+            data = model.createData()
+            pin.framesForwardKinematics(model, data, qq)
+            return data.oMf[model.getFrameId("base")].translation[2]
+
+        def rate(qq):
+            kinematics.update(qq, v)
+            task.update(kinematics)
+            return task.jacobian @ v
+
+        plus, minus = pin.integrate(model, q, h * v), pin.integrate(model, q, -h * v)
+        kinematics.update(q, v)
+        task.update(kinematics)
+        jv, drift = (task.jacobian @ v).copy(), task.drift.copy()
+        np.testing.assert_allclose(jv, (height(plus) - height(minus)) / (2 * h), atol=1e-6)
+        np.testing.assert_allclose(drift, (rate(plus) - rate(minus)) / (2 * h), atol=1e-4)
+
+
+class _CalfTask(Task):
+    dim = 1
+    frames = ("FR_calf",)
+
+    def __init__(self):
+        super().__init__(kp=10.0)
+
+    def compute(self, kinematics):
+        self.error[0] = 0.0
+
+
+def test_registration_errors_name_the_problem():
+    controller = WholeBodyController()
+    with pytest.raises(ConfigurationError, match=r"frames \['FR_calf'\] are not computed.*"
+                                                 r"extra_frames"):
+        controller.add_task(_CalfTask())
+    with pytest.raises(ConfigurationError, match="extra_frames: unknown frame 'hand'"):
+        WholeBodyController(extra_frames=("hand",))
+    with pytest.raises(ConfigurationError, match="expected a tasks.Task, received str"):
+        controller.add_task("height")
+    with pytest.raises(ConfigurationError, match="ComTask is built in"):
+        controller.remove_task(controller.com_task)
+    task = example.BaseHeightTask()
+    controller.add_task(task)
+    with pytest.raises(ConfigurationError, match="BaseHeightTask is already registered"):
+        controller.add_task(task)
+    controller.remove_task(task)
+    assert task not in controller.tasks
+    ok = WholeBodyController(extra_frames=("FR_calf",))
+    ok.add_task(_CalfTask())
