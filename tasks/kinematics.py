@@ -46,11 +46,26 @@ def _inertia_times(m, mc, I, motion, out):
 
 
 @numba.njit(cache=True)
-def _update(q, v, parents, types, axes, idx_q, idx_v, place_R, place_p, mass, lever, inertia,
-            support, gravity, frame_joint, frame_R, frame_p,
-            oR, op, J, vel, acc, bm, bmc, bI, cm, cmc, cI, force, tmp6, tmp3, Rpp, Rj, cw, h,
-            c, pv, pa, M, nle, com, vcom, acom, Jcom, f_R, f_p, f_J, f_v, f_a):
-    """Every output of :class:`RobotKinematics`, world frame, spatial vectors at the origin."""
+def _update(q, v, joints, place_R, place_p, mass, lever, inertia, support, gravity,
+            frame_joint, frame_R, frame_p, rotations, vectors3, vectors6, scalars, small, J,
+            M, nle, com3, Jcom, f_R, f_p, f_J, f_v, f_a):
+    """Every output of :class:`RobotKinematics`, world frame, spatial vectors at the origin.
+
+    Arrays are packed by shape to keep the call's argument count (and its cost) low:
+    ``joints`` (nj, 5) holds parents, types, axes, idx_q, idx_v; the scratch stacks hold
+    rotations (oR, bI, cI), 3-vectors (op, bmc, cmc), 6-vectors (vel, acc, force),
+    scalars (bm, cm) and small temporaries.
+    """
+    parents, types, axes, idx_q, idx_v = (joints[:, 0], joints[:, 1], joints[:, 2],
+                                          joints[:, 3], joints[:, 4])
+    oR, bI, cI = rotations[0], rotations[1], rotations[2]
+    op, bmc, cmc = vectors3[0], vectors3[1], vectors3[2]
+    vel, acc, force = vectors6[0], vectors6[1], vectors6[2]
+    bm, cm = scalars[0], scalars[1]
+    tmp6, h = small[0], small[1]
+    tmp3, cw, c, pv, pa = small[2, :3], small[3, :3], small[4, :3], small[5, :3], small[6, :3]
+    Rpp, Rj = small[7:10, :3], small[10:13, :3]
+    com, vcom, acom = com3[0], com3[1], com3[2]
     nj = parents.size
     nv = v.size
     J[:, :] = 0.0
@@ -313,25 +328,25 @@ class RobotKinematics:
         self.v = np.zeros(nv)
         self.mass_matrix = np.zeros((nv, nv))
         self.nonlinear_effects = np.zeros(nv)
-        self.com_position = np.zeros(3)
-        self.com_velocity = np.zeros(3)
-        self.com_drift = np.zeros(3)
         self.com_jacobian = np.zeros((3, nv))
         self.frame_rotation = np.zeros((nf, 3, 3))
         self.frame_position = np.zeros((nf, 3))
         self.frame_jacobian = np.zeros((nf, 6, nv))
         self.frame_velocity = np.zeros((nf, 6))
         self.frame_drift = np.zeros((nf, 6))
-        self._oR = np.zeros((nj, 3, 3))
-        self._oR[0] = np.eye(3)
-        self._op = np.zeros((nj, 3))
-        self.base_rotation = self._oR[1]
-        self.base_position = self._op[1]
-        self._work = (np.zeros((6, nv)), np.zeros((nj, 6)), np.zeros((nj, 6)), np.zeros(nj),
-                      np.zeros((nj, 3)), np.zeros((nj, 3, 3)), np.zeros(nj), np.zeros((nj, 3)),
-                      np.zeros((nj, 3, 3)), np.zeros((nj, 6)), np.zeros(6), np.zeros(3),
-                      np.zeros((3, 3)), np.zeros((3, 3)), np.zeros(3), np.zeros(6), np.zeros(3),
-                      np.zeros(3), np.zeros(3))
+        self._joints = np.column_stack([self._parents, self._types, self._axes, self._idx_q,
+                                        self._idx_v]).astype(np.int64)
+        self._rotations = np.zeros((3, nj, 3, 3))
+        self._rotations[0, 0] = np.eye(3)
+        self._vectors3 = np.zeros((3, nj, 3))
+        self._vectors6 = np.zeros((3, nj, 6))
+        self._scalars = np.zeros((2, nj))
+        self._small = np.zeros((13, 6))
+        self._jacobian = np.zeros((6, nv))
+        self._com3 = np.zeros((3, 3))
+        self.com_position, self.com_velocity, self.com_drift = self._com3
+        self.base_rotation = self._rotations[0, 1]
+        self.base_position = self._vectors3[0, 1]
 
     def frame_index(self, name: str) -> int:
         """Index of a frame in the ``frame_*`` arrays."""
@@ -344,10 +359,9 @@ class RobotKinematics:
         """Recompute every output at the state ``(q, v)`` (float64 arrays (nq,), (nv,))."""
         self.q[:] = q
         self.v[:] = v
-        _update(self.q, self.v, self._parents, self._types, self._axes, self._idx_q,
-                self._idx_v, self._place_R, self._place_p, self._mass, self._lever,
-                self._inertia, self._support, self._gravity, self._frame_joint, self._frame_R,
-                self._frame_p, self._oR, self._op, *self._work, self.mass_matrix,
-                self.nonlinear_effects, self.com_position, self.com_velocity, self.com_drift,
-                self.com_jacobian, self.frame_rotation, self.frame_position,
-                self.frame_jacobian, self.frame_velocity, self.frame_drift)
+        _update(self.q, self.v, self._joints, self._place_R, self._place_p, self._mass,
+                self._lever, self._inertia, self._support, self._gravity, self._frame_joint,
+                self._frame_R, self._frame_p, self._rotations, self._vectors3, self._vectors6,
+                self._scalars, self._small, self._jacobian, self.mass_matrix,
+                self.nonlinear_effects, self._com3, self.com_jacobian, self.frame_rotation,
+                self.frame_position, self.frame_jacobian, self.frame_velocity, self.frame_drift)

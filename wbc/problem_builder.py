@@ -42,6 +42,10 @@ class Regularization:
     slack: dict[str, float] | None = None
 
 
+#: The constraints the reduced QP eliminates (they define the map ``x = T z + t0``).
+_ELIMINATED = (FloatingBaseDynamics, StanceContacts)
+
+
 class _LayoutProblem:
     """Everything one variable layout needs, allocated once: the full QP, each constraint's
     block, and the reduced QP with its map ``x = T z + t0``."""
@@ -99,8 +103,7 @@ class _LayoutProblem:
         self.z_of_x[layout.force_start:] = np.arange(self.free_columns.size, nz)
         #: Stance joints' accelerations: their bounds become rows of the reduced QP.
         self.bounded = np.array(sorted(stance_columns), dtype=np.int64)
-        eliminated = (FloatingBaseDynamics, StanceContacts)
-        kept = [r for c, b in zip(constraints, self.blocks) if not isinstance(c, eliminated)
+        kept = [r for c, b in zip(constraints, self.blocks) if not isinstance(c, _ELIMINATED)
                 for r in range(b.rows.start, b.rows.stop)]
         self.kept_rows = np.array(kept, dtype=np.int64)
         m_r = self.kept_rows.size + self.bounded.size
@@ -164,6 +167,7 @@ class ProblemBuilder:
         self.tau_prev = np.zeros(self.nv - 6)
         #: Whether the last :meth:`assemble` produced the reduced QP.
         self.reduced = False
+        self._stale = False
 
     # ------------------------------------------------------------------ registration
 
@@ -267,8 +271,11 @@ class ProblemBuilder:
 
     @property
     def problem(self) -> QpProblem:
-        """The full QP of the current layout (over ``x``), as last updated."""
-        return self._problem().full
+        """The full QP of the current layout (over ``x``): its constraints as last updated
+        (its cost as last filled by :meth:`assemble_full`)."""
+        entry = self._problem()
+        self._refresh_eliminated(entry)
+        return entry.full
 
     @property
     def solution(self) -> np.ndarray:
@@ -310,15 +317,30 @@ class ProblemBuilder:
     # ------------------------------------------------------------------ the tick
 
     def update(self) -> None:
-        """Run the contact task, the active tasks and every constraint at the last state."""
+        """Run the contact task, the active tasks and the constraints at the last state.
+
+        When the reduced QP can be used, the eliminated constraints (floating-base dynamics,
+        stance contacts) are not written: :attr:`problem` and :meth:`assemble_full` write
+        them on demand.
+        """
         kin = self.kinematics
         entry = self._problem()
         self.contact_task.update(kin)
         for task in self._active_tasks:
             task.update(kin)
         layout = entry.layout
+        skip = entry.reduced is not None
         for constraint, block in zip(self.constraints, entry.blocks):
-            constraint.update(kin, layout, block)
+            if not (skip and isinstance(constraint, _ELIMINATED)):
+                constraint.update(kin, layout, block)
+        self._stale = skip
+
+    def _refresh_eliminated(self, entry: _LayoutProblem) -> None:
+        if self._stale:
+            for constraint, block in zip(self.constraints, entry.blocks):
+                if isinstance(constraint, _ELIMINATED):
+                    constraint.update(self.kinematics, entry.layout, block)
+            self._stale = False
 
     def assemble(self) -> QpProblem:
         """The QP to solve this tick: the reduced one when possible, else the full one."""
@@ -333,6 +355,7 @@ class ProblemBuilder:
     def assemble_full(self) -> QpProblem:
         """Fill the full QP's cost (its constraints are always up to date)."""
         entry = self._problem()
+        self._refresh_eliminated(entry)
         p = entry.full
         p.H[:] = 0.0
         p.f[:] = 0.0
