@@ -5,7 +5,7 @@ import pytest
 
 from wbc.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
 from wbc.joint_map import JointMap
-from wbc.motor_command import MotorCommand
+from wbc.motor_command import MotorCommand, within_effort_limits
 
 
 def random_command(rng: np.random.Generator) -> MotorCommand:
@@ -62,3 +62,57 @@ def test_problems_of_a_good_command_and_a_wrong_shape():
     assert cmd.problems(np.full(12, 23.7)) == ""
     cmd.kd = np.zeros(3)
     assert cmd.problems(np.full(12, 23.7)) == "kd: expected shape (12,), received (3,)"
+
+
+def slow_problems(cmd: MotorCommand, limit) -> str:
+    """``problems`` as NumPy checks it: long doubles hold the same values but are not
+    compiled for, so the compiled shortcut for a good command is skipped."""
+    fields = ("q_des", "dq_des", "kp", "kd", "tau_ff")
+    return MotorCommand(**{f: np.asarray(getattr(cmd, f), dtype=np.longdouble)
+                           for f in fields}).problems(limit)
+
+
+def test_the_compiled_check_of_a_good_command_agrees_with_numpy():
+    rng = np.random.default_rng(9)
+    limit = np.full(12, 23.7)
+    specials = [np.nan, np.inf, -np.inf, -1e-300, -0.0, 23.7, 23.700000000000003, 1e300]
+    verdicts = set()
+    for _ in range(400):
+        cmd = random_command(rng)
+        field = ("q_des", "dq_des", "kp", "kd", "tau_ff")[rng.integers(5)]
+        getattr(cmd, field)[rng.integers(12)] = specials[rng.integers(len(specials))]
+        expected = slow_problems(cmd, limit)
+        assert cmd.problems(limit) == expected
+        verdicts.add(expected == "")
+    assert verdicts == {True, False}
+    cmd = random_command(rng)
+    assert cmd.problems(np.full(12, np.nan)) == ""  # a NaN limit refuses nothing, as NumPy
+    cmd.kp = cmd.kp.astype(np.float32)  # not float64: checked by NumPy
+    assert cmd.problems(limit) == ""
+    cmd.kp[0] = -1.0
+    assert cmd.problems(limit) == "kp: negative gain at joints [0]"
+    cmd.kp = np.zeros((12, 1))
+    assert cmd.problems(limit) == "kp: expected shape (12,), received (12, 1)"
+    cmd.kp = [0.0] * 11 + [-2.0]  # any array-like
+    assert cmd.problems(limit) == "kp: negative gain at joints [11]"
+
+
+@pytest.mark.parametrize(("tau", "expected"), [
+    (np.full(12, 23.7), True),
+    (np.r_[np.zeros(11), -23.71], False),
+    (np.r_[np.zeros(11), np.nan], False),
+    (np.zeros(11), False),
+    ([0.0] * 12, True),
+    (np.zeros(12, dtype=np.float32), True),
+    (np.zeros((12, 1)), False),
+])
+def test_within_effort_limits(tau, expected):
+    assert within_effort_limits(tau, np.full(12, 23.7)) is expected
+
+
+def test_copy_owns_its_arrays():
+    cmd = random_command(np.random.default_rng(10))
+    copy = cmd.copy()
+    copy.kp[0] = -1.0
+    assert type(copy) is MotorCommand and cmd.kp[0] >= 0.0
+    np.testing.assert_array_equal(copy.tau_ff, cmd.tau_ff)

@@ -2,9 +2,56 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+
+_VECTOR = numba.float64[:]
+
+
+@numba.njit(numba.boolean(_VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR), cache=True)
+def _command_fine(q_des, dq_des, kp, kd, tau_ff, effort_limit):
+    """True when a driver takes the command: shapes (n,), finite, gains >= 0, |tau_ff| <= limit."""
+    n = effort_limit.shape[0]
+    if (q_des.shape[0] != n or dq_des.shape[0] != n or kp.shape[0] != n or kd.shape[0] != n
+            or tau_ff.shape[0] != n):
+        return False
+    for i in range(n):
+        if not (math.isfinite(q_des[i]) and math.isfinite(dq_des[i]) and math.isfinite(kp[i])
+                and math.isfinite(kd[i]) and math.isfinite(tau_ff[i])
+                and kp[i] >= 0.0 and kd[i] >= 0.0 and abs(tau_ff[i]) <= effort_limit[i]):
+            return False
+    return True
+
+
+@numba.njit(numba.boolean(_VECTOR, _VECTOR), cache=True)
+def _within(values, limit):
+    """Same shape, a finite sum and every ``|values| <= limit``."""
+    n = limit.shape[0]
+    if values.shape[0] != n:
+        return False
+    total = 0.0
+    for i in range(n):
+        total += values[i]
+        if not abs(values[i]) <= limit[i]:
+            return False
+    return math.isfinite(total)
+
+
+def within_effort_limits(tau: np.ndarray, effort_limit: np.ndarray) -> bool:
+    """Whether ``tau`` [N m] has the limits' shape, is finite and is inside ``+-effort_limit``.
+
+    Compiled for float64 vectors (no allocation); anything else is checked with NumPy.
+    """
+    try:
+        return _within(tau, effort_limit)
+    except TypeError:  # not two float64 vectors
+        tau = np.asarray(tau)
+        limit = np.asarray(effort_limit)
+        return bool(tau.shape == limit.shape and math.isfinite(tau.sum())
+                    and np.all(np.abs(tau) <= limit))
 
 
 @dataclass
@@ -60,16 +107,25 @@ class MotorCommand:
                             kp=self.kp[index], kd=self.kd[index], tau_ff=self.tau_ff[index])
 
     def copy(self) -> MotorCommand:
-        """A command with its own arrays."""
-        return self.reordered(np.arange(len(self.tau_ff)))
+        """A command with its own arrays (a plain :class:`MotorCommand`)."""
+        return MotorCommand(q_des=np.array(self.q_des), dq_des=np.array(self.dq_des),
+                            kp=np.array(self.kp), kd=np.array(self.kd),
+                            tau_ff=np.array(self.tau_ff))
 
     def problems(self, effort_limit: np.ndarray, names: tuple[str, ...] | None = None) -> str:
         """Why a driver should refuse this command ('' when it is fine).
 
         Refused: a wrong shape, a non-finite value, a negative gain, or a feed-forward
         torque beyond ``effort_limit`` [N m]. Joints are named by ``names`` when given, else
-        by index.
+        by index. A good command of float64 vectors is checked without allocating.
         """
+        try:
+            if _command_fine(self.q_des, self.dq_des, self.kp, self.kd, self.tau_ff,
+                             effort_limit):
+                return ""
+        except TypeError:  # not float64 vectors: the checks below say what is wrong
+            pass
+
         def joints(mask: np.ndarray) -> list:
             found = np.flatnonzero(mask).tolist()
             return [names[i] for i in found] if names is not None else found
@@ -78,7 +134,7 @@ class MotorCommand:
         fields = {"q_des": self.q_des, "dq_des": self.dq_des, "kp": self.kp, "kd": self.kd,
                   "tau_ff": self.tau_ff}
         for name, values in fields.items():
-            values = np.asarray(values)
+            values = fields[name] = np.asarray(values)
             if values.shape != (n,):
                 return f"{name}: expected shape ({n},), received {values.shape}"
             if not np.isfinite(values).all():
@@ -86,7 +142,7 @@ class MotorCommand:
         for name in ("kp", "kd"):
             if (fields[name] < 0.0).any():
                 return f"{name}: negative gain at joints {joints(fields[name] < 0.0)}"
-        beyond = np.abs(self.tau_ff) > effort_limit
+        beyond = np.abs(fields["tau_ff"]) > effort_limit
         if beyond.any():
             return f"tau_ff: beyond the effort limits at joints {joints(beyond)}"
         return ""
