@@ -2,9 +2,96 @@
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from wbc.validation import as_float
+
+#: Most corners a polygon given to :func:`shrunk_signed_distance` may have.
+MAX_CORNERS = 8
+
+
+@numba.njit(numba.float64(numba.float64[:, :], numba.int64, numba.float64, numba.float64,
+                          numba.float64), cache=True, error_model="numpy")
+def _shrunk_signed_distance(points, count, x, y, shrink):
+    """:func:`shrunk_signed_distance` on the first ``count`` rows of ``points``."""
+    cx = 0.0
+    cy = 0.0
+    for i in range(count):
+        cx += points[i, 0]
+        cy += points[i, 1]
+    cx /= count
+    cy /= count
+    px = np.empty(MAX_CORNERS)
+    py = np.empty(MAX_CORNERS)
+    angle = np.empty(MAX_CORNERS)
+    for i in range(count):
+        if shrink == 1.0:
+            px[i], py[i] = points[i, 0], points[i, 1]
+        else:
+            px[i] = cx + shrink * (points[i, 0] - cx)
+            py[i] = cy + shrink * (points[i, 1] - cy)
+    # Counter-clockwise around the shrunk points' centroid (as SupportPolygon.ordered).
+    sx = 0.0
+    sy = 0.0
+    for i in range(count):
+        sx += px[i]
+        sy += py[i]
+    sx /= count
+    sy /= count
+    for i in range(count):
+        angle[i] = math.atan2(py[i] - sy, px[i] - sx)
+    for i in range(1, count):  # insertion sort: a handful of corners
+        a, u, w = angle[i], px[i], py[i]
+        j = i - 1
+        while j >= 0 and angle[j] > a:
+            angle[j + 1], px[j + 1], py[j + 1] = angle[j], px[j], py[j]
+            j -= 1
+        angle[j + 1], px[j + 1], py[j + 1] = a, u, w
+    distance = math.inf
+    for i in range(count):  # inward unit normal of edge i, as SupportPolygon.halfplanes
+        j = (i + 1) % count
+        nx = -(py[j] - py[i])
+        ny = px[j] - px[i]
+        norm = math.sqrt(nx * nx + ny * ny)
+        nx /= norm
+        ny /= norm
+        distance = min(distance, nx * x + ny * y - (nx * px[i] + ny * py[i]))
+    return distance
+
+
+def shrunk_signed_distance(points: np.ndarray, point: np.ndarray, *, shrink: float = 1.0,
+                           count: int | None = None) -> float:
+    """Signed distance [m] from ``point`` to the polygon of ``points`` shrunk about their centroid.
+
+    The polygon's corners are ``centre + shrink (points - centre)``; the distance is to its
+    nearest edge, positive inside (:meth:`SupportPolygon.signed_distance` of those corners,
+    to rounding). One compiled call (about 1 us for a float64 ``points`` array, where the
+    NumPy half-planes take tens): a control loop can call it every tick.
+
+    Args:
+        points: Corners (k, 2) or (k, 3) [m] in any order (only x and y are used), at least 3
+            and at most :data:`MAX_CORNERS`.
+        point: The point (2,) or (3,) [m]; only x and y are used.
+        shrink: Scale of the polygon about its centroid (1: the polygon itself).
+        count: Use only the first ``count`` rows of ``points`` (all by default).
+
+    Raises:
+        ValueError: Fewer than 3 or more than :data:`MAX_CORNERS` corners.
+    """
+    if count is None:
+        count = len(points)
+    if not 3 <= count <= MAX_CORNERS or count > len(points):
+        raise ValueError(f"count: expected 3 to {MAX_CORNERS} corners (at most the "
+                         f"{len(points)} rows of points), received {count}")
+    x, y = float(point[0]), float(point[1])
+    try:
+        return _shrunk_signed_distance(points, count, x, y, float(shrink))
+    except TypeError:  # not a float64 matrix
+        points = np.asarray(points, dtype=np.float64)
+        return _shrunk_signed_distance(points, count, x, y, float(shrink))
 
 
 class SupportPolygon:
