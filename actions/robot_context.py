@@ -8,7 +8,8 @@ import numpy as np
 
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput, ControlStatus
-from wbc.support_polygon import SupportPolygon
+from wbc.description import LEGS
+from wbc.support_polygon import SupportPolygon, shrunk_signed_distance
 
 #: Above this base tilt [deg] the robot is losing its balance.
 TILT_LIMIT_DEG = 12.0
@@ -33,6 +34,7 @@ class RobotContext:
         self.fault = ""
         #: Ticks in a row the controller could only send its damping fallback.
         self.consecutive_fallbacks = 0
+        self._feet = np.zeros((len(LEGS), 3))  # the support feet, filled every watch tick
 
     def record_output(self, out: ControlOutput) -> None:
         """Record the command sent this tick; any tick that is not OK is a controller fault."""
@@ -49,7 +51,7 @@ class RobotContext:
 
     def tilt_deg(self) -> float:
         """Angle [deg] between the base's vertical axis and the world's."""
-        x, y = self.q[3], self.q[4]
+        x, y = float(self.q[3]), float(self.q[4])
         return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
 
     def com_margin_m(self) -> float:
@@ -69,17 +71,22 @@ class RobotContext:
         about its centroid by ``1 - n f_min / (m g)``. With the capture point outside it, the
         robot cannot stop without changing its support (here: putting the raised foot down).
         """
-        legs = self.controller.support_legs()
-        if len(legs) < 3:
+        controller = self.controller
+        legs = controller.support_legs()
+        count = len(legs)
+        if count < 3:
             return -math.inf
-        com = self.controller.com_position()
-        omega0 = math.sqrt(_GRAVITY / max(com[2], 0.05))
-        capture = com[:2] + self.controller.com_velocity()[:2] / omega0
-        points = np.array([self.controller.foot_position(leg)[:2] for leg in legs])
-        weight = self.controller.total_mass_kg * _GRAVITY
-        shrink = max(0.0, 1.0 - len(legs) * self.controller.min_normal_force_n / weight)
-        centre = points.mean(axis=0)
-        return SupportPolygon.signed_distance(centre + shrink * (points - centre), capture)
+        feet = self._feet
+        for i, leg in enumerate(legs):
+            feet[i] = controller.foot_position(leg)
+        # Python floats: a few scalar operations, each far cheaper than on NumPy scalars.
+        x, y, z = controller.com_position().tolist()
+        vx, vy, _ = controller.com_velocity().tolist()
+        omega0 = math.sqrt(_GRAVITY / max(z, 0.05))
+        weight = controller.total_mass_kg * _GRAVITY
+        shrink = max(0.0, 1.0 - count * controller.min_normal_force_n / weight)
+        return shrunk_signed_distance(feet, (x + vx / omega0, y + vy / omega0), shrink=shrink,
+                                      count=count)
 
     def is_upright(self) -> bool:
         """The base is level enough and high enough to stand."""
