@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
+import numba
 import numpy as np
 
 from sim.plant import DEFAULT_PLANT, Plant
@@ -16,6 +18,53 @@ from wbc.errors import ConfigurationError
 from wbc.joint_map import JointMap
 from wbc.motor_command import MotorCommand
 from wbc.validation import as_float, as_vector, check_name
+
+_VECTOR = numba.float64[:]
+_CONTIGUOUS = numba.float64[::1]
+
+
+@numba.njit(numba.boolean(_CONTIGUOUS, _CONTIGUOUS, _CONTIGUOUS, _CONTIGUOUS), cache=True,
+            error_model="numpy")
+def _pin_state(qpos, qvel, q, v):
+    """:func:`wbc.conventions.mujoco_to_pin` into ``q``, ``v``; False on a non-finite entry.
+
+    The same arithmetic (NumPy's BLAS may round the last bit differently): the quaternion
+    ``(w, x, y, z) -> (x, y, z, w)`` and the free joint's linear velocity from the world
+    frame into the base frame, ``R^T v_world``.
+    """
+    finite = True
+    for i in range(q.shape[0]):
+        q[i] = qpos[i]
+        finite = finite and math.isfinite(qpos[i])
+    for i in range(v.shape[0]):
+        v[i] = qvel[i]
+        finite = finite and math.isfinite(qvel[i])
+    w, x, y, z = qpos[3], qpos[4], qpos[5], qpos[6]
+    q[3], q[4], q[5], q[6] = x, y, z, w
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+    r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    a, b, c = qvel[0], qvel[1], qvel[2]
+    v[0] = r00 * a + r10 * b + r20 * c
+    v[1] = r01 * a + r11 * b + r21 * c
+    v[2] = r02 * a + r12 * b + r22 * c
+    return finite
+
+
+@numba.njit(numba.void(_CONTIGUOUS, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR,
+                       _VECTOR), cache=True)
+def _drive(ctrl, kp_bias, kd_bias, q_des, dq_des, kp, kd, tau_ff):
+    """The drivers' law as MuJoCo's actuators: ``ctrl + biasprm . (1, q, dq)``.
+
+    ``ctrl = tau_ff + kp q_des + kd dq_des`` (NumPy's order of operations: the same bits),
+    ``biasprm[:, 1] = -kp``, ``biasprm[:, 2] = -kd``.
+    """
+    for i in range(ctrl.shape[0]):
+        ctrl[i] = tau_ff[i] + kp[i] * q_des[i] + kd[i] * dq_des[i]
+        kp_bias[i] = -kp[i]
+        kd_bias[i] = -kd[i]
 
 
 @dataclass
@@ -77,14 +126,27 @@ class Go2Simulator:
             for leg in LEGS
         }
         self._floor_geom = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+        #: Foot geom id -> its leg's row in LEGS order.
+        self._geom_row = {g: LEGS.index(leg) for leg, g in self._foot_geom.items()}
+        self._foot_body = np.array([
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, FOOT_FRAMES[leg])
+            for leg in LEGS], dtype=np.intp)
+        self._foot_radius = [float(self.model.geom_size[self._foot_geom[leg], 0]) for leg in LEGS]
         self._pushes: list[_Push] = []
+        self._xfrc_dirty = False  # a push wrote xfrc_applied since it was last zeroed
         self._force6 = np.zeros(6)
+        self._velocity6 = np.zeros(6)
+        # MjData's arrays stay where they are for its whole life: views taken once.
+        self._qpos, self._qvel = self.data.qpos, self.data.qvel
+        self._ctrl, self._xfrc = self.data.ctrl, self.data.xfrc_applied
+        self._xpos = self.data.xpos
         # Actuator i drives joint ``_actuator_qpos[i]`` (qpos index) / ``_actuator_dof[i]``.
         self._actuator_dof = self.model.jnt_dofadr[self.model.actuator_trnid[:, 0]]
         self._actuator_qpos = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
         self._kp = self.model.actuator_biasprm[:, 1]  # views: written in place
         self._kd = self.model.actuator_biasprm[:, 2]
         self.effort_limit = self.model.actuator_forcerange[:, 1].copy()  # actuator order
+        self._nq, self._nv = self.model.nq, self.model.nv
         self.reset("standing")
 
     @property
@@ -104,11 +166,23 @@ class Go2Simulator:
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:], self.data.qvel[:] = pin_to_mujoco(q, v)
         self._pushes.clear()
+        self._xfrc_dirty = False  # mj_resetData zeroed it
         mujoco.mj_forward(self.model, self.data)
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(q (19,), v (18,))`` in Pinocchio convention, description order."""
-        return mujoco_to_pin(self.data.qpos, self.data.qvel)
+        """``(q (19,), v (18,))`` in Pinocchio convention, description order (new arrays).
+
+        :func:`wbc.conventions.mujoco_to_pin`, compiled (the base's linear velocity may
+        differ in its last bit); a non-finite state raises as it does.
+
+        Raises:
+            NonFiniteError: A NaN or infinite position or velocity (a diverged simulation).
+        """
+        q = np.empty(self._nq)
+        v = np.empty(self._nv)
+        if not _pin_state(self._qpos, self._qvel, q, v):
+            mujoco_to_pin(self._qpos, self._qvel)  # raises, naming the entries
+        return q, v
 
     def step(self, tau: np.ndarray, n_steps: int = 1) -> None:
         """Apply joint torques [N m] (description order) and advance ``n_steps`` timesteps.
@@ -143,10 +217,15 @@ class Go2Simulator:
         problem = command.problems(self.effort_limit)
         if problem:
             raise ConfigurationError(f"motor command: {problem}")
-        self.data.ctrl[:] = command.tau_ff + command.kp * command.q_des + command.kd * command.dq_des
         # The actuator force is ctrl + biasprm . (1, q, dq): the driver's PD law.
-        np.negative(command.kp, out=self._kp)
-        np.negative(command.kd, out=self._kd)
+        try:
+            _drive(self._ctrl, self._kp, self._kd, command.q_des, command.dq_des, command.kp,
+                   command.kd, command.tau_ff)
+        except TypeError:  # not float64 arrays
+            self._ctrl[:] = (command.tau_ff + command.kp * command.q_des
+                             + command.kd * command.dq_des)
+            np.negative(command.kp, out=self._kp)
+            np.negative(command.kd, out=self._kd)
         self._advance(n_steps)
 
     def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -155,6 +234,10 @@ class Go2Simulator:
                 self.data.qvel[self._actuator_dof].copy())
 
     def _advance(self, n_steps: int) -> None:
+        if not (self._pushes or self._xfrc_dirty):  # no force to apply or to clear
+            if n_steps > 0:
+                mujoco.mj_step(self.model, self.data, n_steps)
+            return
         for _ in range(n_steps):
             self._apply_pushes()
             mujoco.mj_step(self.model, self.data)
@@ -183,31 +266,49 @@ class Go2Simulator:
         ))
 
     def _apply_pushes(self) -> None:
-        self.data.xfrc_applied[:] = 0.0
+        xfrc = self._xfrc
+        xfrc[:] = 0.0
         now = self.time_s
         self._pushes = [p for p in self._pushes if p.end_s > now + 1e-12]
         for push in self._pushes:
-            self.data.xfrc_applied[push.body_id, :3] += push.force_n
-            self.data.xfrc_applied[push.body_id, 3:] += push.torque_nm
+            xfrc[push.body_id, :3] += push.force_n
+            xfrc[push.body_id, 3:] += push.torque_nm
+        self._xfrc_dirty = bool(self._pushes)
 
     def foot_contact_forces(self) -> dict[str, np.ndarray]:
         """World-frame force [N] the floor exerts on each foot (zero when not touching)."""
-        forces = {leg: np.zeros(3) for leg in LEGS}
-        geom_leg = {g: leg for leg, g in self._foot_geom.items()}
-        for i in range(self.data.ncon):
-            contact = self.data.contact[i]
-            pair = (contact.geom1, contact.geom2)
-            if self._floor_geom not in pair:
+        forces = self.foot_contact_force_array()
+        return {leg: forces[i] for i, leg in enumerate(LEGS)}
+
+    def foot_contact_force_array(self, out: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`foot_contact_forces` as rows (4, 3) in ``LEGS`` order, into ``out`` if given."""
+        forces = np.zeros((len(LEGS), 3)) if out is None else out
+        forces[:] = 0.0
+        ncon = self.data.ncon
+        if ncon == 0:
+            return forces
+        contact = self.data.contact
+        floor, rows = self._floor_geom, self._geom_row
+        frames = None
+        for i, (geom1, geom2) in enumerate(contact.geom.tolist()):
+            if geom1 == floor:
+                row, sign = rows.get(geom2), 1.0
+            elif geom2 == floor:
+                row, sign = rows.get(geom1), -1.0
+            else:
                 continue
-            other = pair[1] if pair[0] == self._floor_geom else pair[0]
-            leg = geom_leg.get(other)
-            if leg is None:
+            if row is None:
                 continue
+            if frames is None:
+                frames = contact.frame
             mujoco.mj_contactForce(self.model, self.data, i, self._force6)
             # The contact frame's first row is the normal, pointing from geom1 to geom2; the
             # force acts on geom2 along +normal.
-            world = contact.frame.reshape(3, 3).T @ self._force6[:3]
-            forces[leg] += world if contact.geom2 == other else -world
+            world = frames[i].reshape(3, 3).T @ self._force6[:3]
+            if sign > 0.0:
+                forces[row] += world
+            else:
+                forces[row] -= world
         return forces
 
     def foot_sliding_velocities(self) -> dict[str, np.ndarray]:
@@ -216,23 +317,30 @@ class Go2Simulator:
         This is the sliding velocity of a foot on the floor: zero when the sphere rolls
         without slipping, even though its centre then moves.
         """
-        velocity = np.zeros(6)
-        out = {}
-        for leg, frame in FOOT_FRAMES.items():
-            body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, frame)
+        sliding = self.foot_sliding_velocity_array()
+        return {leg: sliding[i] for i, leg in enumerate(LEGS)}
+
+    def foot_sliding_velocity_array(self, out: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`foot_sliding_velocities` as rows (4, 2) in ``LEGS`` order (into ``out``)."""
+        sliding = np.empty((len(LEGS), 2)) if out is None else out
+        velocity = self._velocity6
+        for i, body in enumerate(self._foot_body.tolist()):
             mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_BODY, body,
                                      velocity, 0)
-            angular, linear = velocity[:3], velocity[3:]
             # Point d = (0, 0, -r) below the centre: v + omega x d.
-            r = self.model.geom_size[self._foot_geom[leg], 0]
-            out[leg] = np.array([linear[0] - r * angular[1], linear[1] + r * angular[0]])
-        return out
+            r = self._foot_radius[i]
+            sliding[i, 0] = velocity[3] - r * velocity[1]
+            sliding[i, 1] = velocity[4] + r * velocity[0]
+        return sliding
 
     def foot_positions(self) -> dict[str, np.ndarray]:
         """World position [m] of each foot frame (the foot sphere's centre)."""
-        return {
-            leg: self.data.xpos[
-                mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, frame)
-            ].copy()
-            for leg, frame in FOOT_FRAMES.items()
-        }
+        positions = self.foot_position_array()
+        return {leg: positions[i] for i, leg in enumerate(LEGS)}
+
+    def foot_position_array(self, out: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`foot_positions` as rows (4, 3) in ``LEGS`` order (into ``out`` if given)."""
+        if out is None:
+            return self._xpos[self._foot_body]
+        np.take(self._xpos, self._foot_body, axis=0, out=out)
+        return out

@@ -7,8 +7,9 @@ import pytest
 
 from sim.simulator import Go2Simulator
 from tests.conftest import random_configuration
-from wbc.description import FOOT_FRAMES, JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
-from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.conventions import mujoco_to_pin
+from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
+from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
 from wbc.joint_map import JointMap
 from wbc.joint_pd_controller import JointPdController
 from wbc.motor_command import MotorCommand
@@ -142,3 +143,71 @@ def test_a_bad_motor_command_is_refused_whole(sim):
     with pytest.raises(ConfigurationError, match=r"motor command: kp: negative gain at joints \[2\]"):
         sim.step_command(command)
     assert sim.time_s == before
+
+
+def test_state_is_the_conventions_conversion(sim, model):
+    rng = np.random.default_rng(12)
+    for _ in range(50):
+        sim.reset(random_configuration(model, rng, scale=1.0), rng.normal(size=18))
+        q, v = sim.state()
+        q_ref, v_ref = mujoco_to_pin(sim.data.qpos, sim.data.qvel)
+        np.testing.assert_array_equal(q, q_ref)
+        np.testing.assert_allclose(v, v_ref, rtol=0.0, atol=1e-14)
+    assert q is not sim.state()[0]  # new arrays every call
+
+
+def test_a_diverged_state_raises_as_the_conversion_does():
+    sim = Go2Simulator()
+    sim.data.qvel[7] = np.nan
+    with pytest.raises(NonFiniteError, match=r"qvel: non-finite value at index \[7\]"):
+        sim.state()
+
+
+def test_physics_is_bit_identical_to_mujoco_stepped_by_hand(description):
+    """The drivers' law and a push written into a bare MuJoCo copy, one mj_step at a time,
+    give the same bits as the simulator's two-step control periods."""
+    sim = Go2Simulator(actuator_order=UNITREE_SDK_JOINT_NAMES)
+    model = sim.spec.compile()
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = sim.data.qpos, sim.data.qvel
+    mujoco.mj_forward(model, data)
+    pd = JointPdController(description.pose("standing"))
+    base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "base")
+    push_end = -1.0
+    for tick in range(300):
+        q, v = sim.state()
+        command = MotorCommand(q_des=description.pose("standing")[7:], dq_des=np.zeros(12),
+                               kp=np.full(12, 30.0), kd=np.full(12, 1.0),
+                               tau_ff=pd.compute(q, v) * 0.5)
+        if tick == 100:  # a push that ends inside a control period
+            sim.apply_force([0.0, 40.0, 0.0], 0.0105)
+            push_end = data.time + 0.0105
+        sdk = command.reordered(sim.actuator_map.index)
+        data.ctrl[:] = sdk.tau_ff + sdk.kp * sdk.q_des + sdk.kd * sdk.dq_des
+        model.actuator_biasprm[:, 1] = -sdk.kp
+        model.actuator_biasprm[:, 2] = -sdk.kd
+        for _ in range(2):
+            data.xfrc_applied[:] = 0.0
+            if push_end > data.time + 1e-12:
+                data.xfrc_applied[base, 1] = 40.0
+            mujoco.mj_step(model, data)
+        sim.step_command(command, n_steps=2)
+        np.testing.assert_array_equal(sim.data.qpos, data.qpos)
+        np.testing.assert_array_equal(sim.data.qvel, data.qvel)
+    assert push_end > 0.1 and not sim.data.xfrc_applied.any()
+
+
+def test_foot_arrays_are_the_dicts_in_leg_order(sim, description):
+    sim.reset("standing")
+    pd = JointPdController(description.pose("standing"))
+    for _ in range(50):
+        sim.step(pd.compute(*sim.state()))
+    forces, positions = sim.foot_contact_forces(), sim.foot_positions()
+    sliding = sim.foot_sliding_velocities()
+    assert list(forces) == list(LEGS)
+    np.testing.assert_array_equal(sim.foot_contact_force_array(), [forces[leg] for leg in LEGS])
+    np.testing.assert_array_equal(sim.foot_position_array(), [positions[leg] for leg in LEGS])
+    out = np.full((4, 2), np.nan)
+    assert sim.foot_sliding_velocity_array(out) is out
+    np.testing.assert_array_equal(out, [sliding[leg] for leg in LEGS])
+    assert min(f[2] for f in forces.values()) > 5.0
