@@ -13,6 +13,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from wbc.description import JOINT_NAMES
 from wbc.joint_map import JointMap
 from wbc.motor_command import MotorCommand
 from wbc.validation import as_vector
@@ -53,6 +54,8 @@ class MappedRobot:
     def __init__(self, robot: RobotInterface, *, aliases: dict[str, str] | None = None):
         self.robot = robot
         self.joint_map = JointMap(robot.joint_names, aliases=aliases)
+        #: The robot's order is the description's: arrays are copied, not reordered.
+        self._same_order = bool(np.array_equal(self.joint_map.index, np.arange(len(JOINT_NAMES))))
 
     @property
     def time_s(self) -> float:
@@ -64,10 +67,14 @@ class MappedRobot:
         q, v = self.robot.read_state()
         q = as_vector("q", q, 19, finite=False)
         v = as_vector("v", v, 18, finite=False)
-        q[7:] = self.joint_map.from_other(q[7:])
-        v[6:] = self.joint_map.from_other(v[6:])
+        if not self._same_order:
+            q[7:] = q[7:][self.joint_map.inverse]
+            v[6:] = v[6:][self.joint_map.inverse]
         return q, v
 
     def write_command(self, command: MotorCommand) -> None:
-        """A motor command in the description order, sent in the robot's order."""
-        self.robot.write_command(command.reordered(self.joint_map.index))
+        """A motor command in the description order, sent in the robot's order (a copy)."""
+        if self._same_order:
+            self.robot.write_command(command.copy())
+        else:
+            self.robot.write_command(command.reordered(self.joint_map.index))

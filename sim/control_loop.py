@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -19,6 +18,7 @@ from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput
 from wbc.description import JOINT_NAMES, Go2Description
 from wbc.errors import ConfigurationError
+from wbc.motor_command import within_effort_limits
 from wbc.whole_body_controller import WholeBodyController
 
 TickHook = Callable[["ControlLoop", ControlOutput], None]
@@ -112,7 +112,7 @@ class ControlLoop:
         q, v = self.robot.read_state()
         self.context.observe(now, q, v)
         self.runner.tick(now)
-        out = self._guard(self.controller.step(q, v), v)
+        out = self.guard(self.controller.step(q, v), v)
         self.context.record_output(out)
         self.last_output = out
         self.robot.write_command(out)
@@ -120,14 +120,15 @@ class ControlLoop:
             hook(self, out)
         return out
 
-    def _guard(self, out: ControlOutput, v) -> ControlOutput:
-        """Never send a command a driver should refuse (non-finite, a negative gain, a
-        feed-forward or resulting torque beyond the effort limits): fall back."""
+    def guard(self, out: ControlOutput, v: np.ndarray) -> ControlOutput:
+        """``out``, or the controller's safe command when a driver should refuse it.
+
+        Refused: a non-finite value, a negative gain, a feed-forward or resulting torque
+        beyond the effort limits (see :meth:`wbc.motor_command.MotorCommand.problems`).
+        """
         limit = self._effort_limit
         problem = out.problems(limit, JOINT_NAMES)
-        tau = np.asarray(out.tau)
-        if not problem and not (tau.shape == limit.shape and math.isfinite(tau.sum())
-                                and np.all(np.abs(tau) <= limit)):
+        if not problem and not within_effort_limits(out.tau, limit):
             problem = "tau: non-finite or beyond the effort limits"
         if not problem:
             return out

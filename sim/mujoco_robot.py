@@ -25,8 +25,9 @@ class MujocoRobot:
 
     def __init__(self, sim: Go2Simulator, *, control_period_s: float = 1e-3):
         self.sim = sim
-        self.substeps = max(1, int(round(control_period_s / sim.timestep_s)))
+        self.substeps = max(1, round(control_period_s / sim.timestep_s))
         self._order = sim.actuator_map.index  # actuator i drives description joint index[i]
+        self._reorder = not np.array_equal(self._order, np.arange(len(self._order)))
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -41,8 +42,9 @@ class MujocoRobot:
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q, v)``, Pinocchio convention, joints in actuator order."""
         q, v = self.sim.state()
-        q[7:] = q[7:][self._order]
-        v[6:] = v[6:][self._order]
+        if self._reorder:
+            q[7:] = q[7:][self._order]
+            v[6:] = v[6:][self._order]
         return q, v
 
     def write_command(self, command: MotorCommand) -> None:
