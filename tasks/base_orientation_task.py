@@ -54,10 +54,10 @@ class BaseOrientationTask(Task):
         """Set the target from roll, pitch, yaw [rad] (extrinsic X, Y, Z)."""
         self.set_target(pin.rpy.rpyToMatrix(float(roll), float(pitch), float(yaw)))
 
-    def update(self, kinematics: RobotKinematics) -> None:
-        task_kernels.base_orientation_task(kinematics.base_rotation, kinematics.v, self.rotation,
-                                           self.reference, self.bias, self.gains, self.error,
-                                           self.error_rate, self.desired_acceleration)
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
+        return task_kernels.base_orientation_task, (
+            kinematics.base_rotation, kinematics.v, self.rotation, self.reference, self.bias,
+            self.gains, self.error, self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)
+        self.update(kinematics)  # the compiled kernel fills every array

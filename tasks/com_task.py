@@ -31,12 +31,13 @@ class ComTask(Task):
         """Set the target position [m] and velocity [m/s] (world frame); copies them."""
         self._set_reference("ComTask", position, velocity)
 
-    def update(self, kinematics: RobotKinematics) -> None:
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
         self._require_target()
         k = kinematics
-        task_kernels.com_task(k.com_jacobian, k.com_position, k.com_velocity, k.com_drift, _XYZ,
-                              self.reference, self.gains, self.jacobian, self.drift, self.error,
-                              self.error_rate, self.desired_acceleration)
+        return task_kernels.com_task, (
+            k.com_jacobian, k.com_position, k.com_velocity, k.com_drift, _XYZ, self.reference,
+            self.gains, self.jacobian, self.drift, self.error, self.error_rate,
+            self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)
+        self.update(kinematics)  # the compiled kernel fills every array

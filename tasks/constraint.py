@@ -63,5 +63,25 @@ class Constraint:
 
     def update(self, kinematics: RobotKinematics, layout: VariableLayout,
                block: ConstraintBlock) -> None:
-        """Write this tick's entries at the last state."""
-        raise NotImplementedError(f"{type(self).__name__}.update")
+        """Write this tick's entries at the last state.
+
+        Override it, or (built-in constraints) :meth:`_compiled_call`: its kernel and
+        arguments are gathered once per kinematics and block.
+        """
+        call = self._call
+        if call is not None and call[0] is kinematics and call[1] is block:
+            call[2](*call[3])
+            return
+        compiled = self._compiled_call(kinematics, layout, block)
+        if compiled is None:
+            raise NotImplementedError(f"{type(self).__name__}.update")
+        self._call = (kinematics, block, *compiled)
+        compiled[0](*compiled[1])
+
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple | None:
+        """``(kernel, arguments)`` writing this constraint's entries, or ``None``."""
+        return None
+
+    #: The cached ``(kinematics, block, kernel, arguments)`` of a compiled constraint.
+    _call: tuple | None = None

@@ -74,13 +74,14 @@ def support_barrier_rows(com_jacobian, com_position, com_velocity, com_drift, no
                          n_edges, omega, slack_column, A, lower, upper):
     """Centre of mass inside the support polygon: a soft, critically damped barrier.
 
-    Edge ``e`` of the half-planes ``n_e . p >= o_e`` keeps ``d = n_e . c_xy - o_e`` obeying
+    ``n_edges`` is a one-element array (so that a cached call sees its changes). Edge ``e``
+    of the half-planes ``n_e . p >= o_e`` keeps ``d = n_e . c_xy - o_e`` obeying
     ``d'' + 2 omega d' + omega^2 d >= -s``, relaxed by the slack ``s >= 0``; rows past
     ``n_edges`` are free.
     """
     nv = com_jacobian.shape[1]
     for e in range(A.shape[0]):
-        if e < n_edges:
+        if e < n_edges[0]:
             nx, ny = normals[e, 0], normals[e, 1]
             for k in range(nv):
                 A[e, k] = nx * com_jacobian[0, k] + ny * com_jacobian[1, k]

@@ -54,12 +54,11 @@ class ContactTask(Task):
         super().__init__(kp=0.0, kd=kd, weight=1.0, nv=model.nv)
         self._has_target = True  # the target is implicit: no acceleration
 
-    def update(self, kinematics: RobotKinematics) -> None:
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
         k = kinematics
-        task_kernels.rolling_contacts(k.frame_jacobian, k.frame_drift, self.frame_indices,
-                                      self.radius_m, k.v, self.jacobian, self.drift,
-                                      self.error_rate)
-        np.multiply(self.gains[1], self.error_rate, out=self.desired_acceleration)
+        return task_kernels.rolling_contacts, (
+            k.frame_jacobian, k.frame_drift, self.frame_indices, self.radius_m, self.gains,
+            k.v, self.jacobian, self.drift, self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)
+        self.update(kinematics)  # the compiled kernel fills every array

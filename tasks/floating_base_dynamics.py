@@ -36,9 +36,9 @@ class FloatingBaseDynamics(Constraint):
     def rows(self, layout: VariableLayout) -> int:
         return 6
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
-        constraint_kernels.equation_of_motion_rows(
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple:
+        return constraint_kernels.equation_of_motion_rows, (
             kinematics.mass_matrix, kinematics.nonlinear_effects, self.contacts.jacobian,
             layout.loaded, layout.force_columns, 0, block.A, block.lower, block.upper,
             self._zero)

@@ -50,13 +50,13 @@ class FramePositionTask(Task):
         """Set the target position [m] and velocity [m/s] on the task's axes; copies them."""
         self._set_reference(self.frame, position, velocity)
 
-    def update(self, kinematics: RobotKinematics) -> None:
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
         self._require_target()
         k = kinematics
-        task_kernels.frame_position_task(
+        return task_kernels.frame_position_task, (
             k.frame_jacobian, k.frame_position, k.frame_velocity, k.frame_drift,
-            self.frame_indices[0], self._axes, self.reference, self.gains, self.jacobian,
+            int(self.frame_indices[0]), self._axes, self.reference, self.gains, self.jacobian,
             self.drift, self.error, self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)
+        self.update(kinematics)  # the compiled kernel fills every array

@@ -49,8 +49,8 @@ class FrictionCones(Constraint):
                 A[row + 1, c + axis], A[row + 1, c + 2] = 1.0, mu   # f_t + mu f_z >= 0
                 block.lower[row + 1] = 0.0
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
-        constraint_kernels.normal_force_bounds(layout.loaded, layout.force_columns,
-                                               self.min_force_n, self.max_force, block.lb,
-                                               block.ub)
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple:
+        return constraint_kernels.normal_force_bounds, (
+            layout.loaded, layout.force_columns, self.min_force_n, self.max_force, block.lb,
+            block.ub)

@@ -37,8 +37,8 @@ class JointLimits(Constraint):
     def rows(self, layout: VariableLayout) -> int:
         return 0
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
-        constraint_kernels.joint_acceleration_bounds(kinematics.q, kinematics.v, self.q_low,
-                                                     self.q_high, self.v_max, self.horizon_s,
-                                                     block.lb, block.ub)
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple:
+        return constraint_kernels.joint_acceleration_bounds, (
+            kinematics.q, kinematics.v, self.q_low, self.q_high, self.v_max, self.horizon_s,
+            block.lb, block.ub)

@@ -66,6 +66,13 @@ def _update(q, v, joints, place_R, place_p, mass, lever, inertia, support, gravi
     tmp3, cw, c, pv, pa = small[2, :3], small[3, :3], small[4, :3], small[5, :3], small[6, :3]
     Rpp, Rj = small[7:10, :3], small[10:13, :3]
     com, vcom, acom = com3[0], com3[1], com3[2]
+    total = 0.0
+    for k in range(q.size):
+        total += q[k]
+    for k in range(v.size):
+        total += v[k]
+    if not np.isfinite(total):  # a NaN or infinite input: leave every output as it was
+        return False
     nj = parents.size
     nv = v.size
     J[:, :] = 0.0
@@ -251,6 +258,7 @@ def _update(q, v, joints, place_R, place_p, mass, lever, inertia, support, gravi
         _cross(w, f_v[f, :3], tmp3)
         for a in range(3):
             f_a[f, a] += tmp3[a]
+    return True
 
 
 class RobotKinematics:
@@ -355,11 +363,15 @@ class RobotKinematics:
                                      f"{list(self.frames)}")
         return self.frames.index(name)
 
-    def update(self, q: np.ndarray, v: np.ndarray) -> None:
-        """Recompute every output at the state ``(q, v)`` (float64 arrays (nq,), (nv,))."""
+    def update(self, q: np.ndarray, v: np.ndarray) -> bool:
+        """Recompute every output at the state ``(q, v)`` (float64 arrays (nq,), (nv,)).
+
+        Returns False, leaving the outputs as they were, when ``q`` or ``v`` holds a NaN or
+        an infinite value.
+        """
         self.q[:] = q
         self.v[:] = v
-        _update(self.q, self.v, self._joints, self._place_R, self._place_p, self._mass,
+        return _update(self.q, self.v, self._joints, self._place_R, self._place_p, self._mass,
                 self._lever, self._inertia, self._support, self._gravity, self._frame_joint,
                 self._frame_R, self._frame_p, self._rotations, self._vectors3, self._vectors6,
                 self._scalars, self._small, self._jacobian, self.mass_matrix,

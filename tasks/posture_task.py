@@ -46,10 +46,11 @@ class PostureTask(Task):
                 f"PostureTask.joint_weights: expected values >= 0, received {weights.tolist()}")
         self.row_weights[:] = weights
 
-    def update(self, kinematics: RobotKinematics) -> None:
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
         self._require_target()
-        task_kernels.posture_task(kinematics.q, kinematics.v, self.reference, self.gains,
-                                  self.error, self.error_rate, self.desired_acceleration)
+        return task_kernels.posture_task, (
+            kinematics.q, kinematics.v, self.reference, self.gains, self.error,
+            self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)
+        self.update(kinematics)  # the compiled kernel fills every array

@@ -28,9 +28,9 @@ class StanceContacts(Constraint):
     def rows(self, layout: VariableLayout) -> int:
         return 3 * len(layout.force_contacts)
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple:
         task = self.contacts
-        constraint_kernels.stance_contact_rows(task.jacobian, task.drift,
-                                               task.desired_acceleration, layout.loaded,
-                                               block.A, block.lower, block.upper)
+        return constraint_kernels.stance_contact_rows, (
+            task.jacobian, task.drift, task.desired_acceleration, layout.loaded, block.A,
+            block.lower, block.upper)

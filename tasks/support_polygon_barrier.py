@@ -37,7 +37,7 @@ class SupportPolygonBarrier(Constraint):
         self.omega = as_float("omega", omega, low=0.0)
         self.normals = np.zeros((MAX_EDGES, 2))
         self.offsets = np.zeros(MAX_EDGES)
-        self.n_edges = 0
+        self._n_edges = np.zeros(1, dtype=np.int64)  # an array: read by the cached call
 
     def set_polygon(self, normals: np.ndarray, offsets: np.ndarray) -> None:
         """Inward unit normals (k, 2) and offsets (k,) of the edges; ``k = 0`` disables it."""
@@ -46,7 +46,12 @@ class SupportPolygonBarrier(Constraint):
             raise ConfigurationError(f"polygon: expected at most {MAX_EDGES} edges with normals "
                                      f"(k, 2), received normals {np.shape(normals)} and "
                                      f"{k} offsets")
-        self.normals[:k], self.offsets[:k], self.n_edges = normals, offsets, k
+        self.normals[:k], self.offsets[:k], self._n_edges[0] = normals, offsets, k
+
+    @property
+    def n_edges(self) -> int:
+        """Number of edges in use."""
+        return int(self._n_edges[0])
 
     def rows(self, layout: VariableLayout) -> int:
         return MAX_EDGES
@@ -55,10 +60,10 @@ class SupportPolygonBarrier(Constraint):
         column = layout.slack_column("support")
         block.lb[column], block.ub[column] = 0.0, constraint_kernels.INF
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple:
         k = kinematics
-        constraint_kernels.support_barrier_rows(
+        return constraint_kernels.support_barrier_rows, (
             k.com_jacobian, k.com_position, k.com_velocity, k.com_drift, self.normals,
-            self.offsets, self.n_edges, self.omega, layout.slack_column("support"), block.A,
+            self.offsets, self._n_edges, self.omega, layout.slack_column("support"), block.A,
             block.lower, block.upper)

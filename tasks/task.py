@@ -133,11 +133,36 @@ class Task:
             self.frame_indices[i] = kinematics.frame_index(frame)
 
     def update(self, kinematics: RobotKinematics) -> None:
-        """Recompute error, Jacobian, drift and desired acceleration at the last state."""
-        self.compute(kinematics)
-        desired = self.desired_acceleration
-        desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
-        desired += self.reference[2]
+        """Recompute error, Jacobian, drift and desired acceleration at the last state.
+
+        A built-in task runs its compiled kernel, whose arguments are gathered once
+        (:meth:`_compiled_call`) and again only when its arrays or the kinematics change;
+        any other task runs :meth:`compute` and the PD law in NumPy.
+        """
+        call = self._call
+        if call is not None and call[0] is kinematics:
+            call[1](*call[2])
+            return
+        compiled = self._compiled_call(kinematics)
+        if compiled is None:
+            self.compute(kinematics)
+            desired = self.desired_acceleration
+            desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
+            desired += self.reference[2]
+            return
+        self._call = (kinematics, *compiled)
+        compiled[0](*compiled[1])
+
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple | None:
+        """``(kernel, arguments)`` that fill this task's arrays, or ``None`` (use compute).
+
+        Called when the arrays were re-bound (``_call`` reset to ``None``); raises when the
+        task cannot run yet (no target).
+        """
+        return None
+
+    #: The cached ``(kinematics, kernel, arguments)`` of a compiled task.
+    _call: tuple | None = None
 
     def compute(self, kinematics: RobotKinematics) -> None:
         """Fill ``error``, ``error_rate``, ``jacobian`` and ``drift``; subclasses implement."""

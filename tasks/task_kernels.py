@@ -85,9 +85,10 @@ def posture_task(q, v, reference, gains, error, error_rate, desired):
 
 
 @numba.njit(cache=True)
-def rolling_contacts(frame_jacobian, frame_drift, indices, radius, v, jacobian, drift,
-                     error_rate):
-    """Rolling-sphere contact points' Jacobians, drifts and velocities (minus), 3 rows each.
+def rolling_contacts(frame_jacobian, frame_drift, indices, radius, gains, v, jacobian, drift,
+                     error_rate, desired):
+    """Rolling-sphere contact points' Jacobians, drifts, minus their velocities, and the
+    desired accelerations ``kd * error_rate`` (``kd = gains[1]``; 3 rows each).
 
     The contact point sits ``d = (0, 0, -radius)`` below the sphere centre (world), so
     ``J = J_lin - [d]x J_ang`` and ``drift = a_lin - [d]x alpha``.
@@ -109,3 +110,4 @@ def rolling_contacts(frame_jacobian, frame_drift, indices, radius, v, jacobian, 
             for k in range(nv):
                 s += jacobian[row + a, k] * v[k]
             error_rate[row + a] = -s
+            desired[row + a] = -gains[1] * s

@@ -30,14 +30,24 @@ class TorqueLimits(Constraint):
             tau_max: Torque limit of each actuated joint [N m] (nv - 6,).
         """
         self.contacts = contacts
-        self.tau_max = as_vector("tau_max", tau_max, contacts.nv - 6)
+        self.tau_max = tau_max
+
+    @property
+    def tau_max(self) -> np.ndarray:
+        """Torque limit of each actuated joint [N m]."""
+        return self._tau_max
+
+    @tau_max.setter
+    def tau_max(self, value: np.ndarray) -> None:
+        self._tau_max = as_vector("tau_max", value, self.contacts.nv - 6)
+        self._call = None  # the cached kernel call holds the previous array
 
     def rows(self, layout: VariableLayout) -> int:
         return layout.nv - 6
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
-        constraint_kernels.equation_of_motion_rows(
+    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                       block: ConstraintBlock) -> tuple:
+        return constraint_kernels.equation_of_motion_rows, (
             kinematics.mass_matrix, kinematics.nonlinear_effects, self.contacts.jacobian,
             layout.loaded, layout.force_columns, 6, block.A, block.lower, block.upper,
             self.tau_max)

@@ -59,7 +59,7 @@ def test_reduced_qp_has_the_full_qps_solution(model, standing, swing, seed):
     full = builder.assemble_full()   # before accept(): the rate costs pull to the last x
     reference = DaqpBackend().solve(full)
     builder.reduced = True
-    x = builder.accept(z.x).copy()
+    x = builder.accept(z.x)[0].copy()
     assert reference.found, reference.reason
     np.testing.assert_allclose(x, reference.x, atol=1e-6, rtol=1e-6)
     eq, ineq = full.violations(x)

@@ -88,6 +88,9 @@ class _LayoutProblem:
         self.reduced: QpProblem | None = None
         if leg_columns is not None:
             self._allocate_reduction(constraints, leg_columns)
+        #: The constraints written every tick (with the reduction, not the eliminated ones).
+        self.per_tick = [(c, b) for c, b in zip(constraints, self.blocks)
+                         if self.reduced is None or not isinstance(c, _ELIMINATED)]
 
     def _allocate_reduction(self, constraints: Sequence[Constraint],
                             leg_columns: np.ndarray) -> None:
@@ -247,6 +250,7 @@ class ProblemBuilder:
                 setattr(task, name, stacked[view])
             self._gains[i] = task.gains
             task.gains = self._gains[i]
+            task._call = None  # its compiled call held the arrays it had before
             self._active[i] = old[i] if i < old.size else True
             start += dim
         self._active_tasks = [t for t, on in zip(self.tasks, self._active) if on]
@@ -329,11 +333,9 @@ class ProblemBuilder:
         for task in self._active_tasks:
             task.update(kin)
         layout = entry.layout
-        skip = entry.reduced is not None
-        for constraint, block in zip(self.constraints, entry.blocks):
-            if not (skip and isinstance(constraint, _ELIMINATED)):
-                constraint.update(kin, layout, block)
-        self._stale = skip
+        for constraint, block in entry.per_tick:
+            constraint.update(kin, layout, block)
+        self._stale = entry.reduced is not None
 
     def _refresh_eliminated(self, entry: _LayoutProblem) -> None:
         if self._stale:
@@ -389,15 +391,33 @@ class ProblemBuilder:
             self.regularization.torque_rate, entry.T, entry.t0, p.H, p.f, p.A, p.lower, p.upper,
             p.lb, p.ub, entry.offset, entry.rhs, entry.tau_offset, L, Linv, K, X, entry.g)
 
-    def accept(self, solution: np.ndarray) -> np.ndarray:
-        """Record the solver's solution of the problem :meth:`assemble` returned; returns ``x``."""
+    def accept(self, solution: np.ndarray,
+               forces: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Record the solver's solution of the problem :meth:`assemble` returned.
+
+        Returns ``x`` and the joint torques [N m] it implies (a new array); fills
+        ``forces`` (contacts, 3) [N] when given, zeros for the contacts without force
+        variables.
+        """
         entry = self._problem()
-        if self.reduced:
-            qp_kernel.expand(entry.T, entry.t0, solution, entry.x)
+        layout = entry.layout
+        tau = np.empty(self.nv - 6)
+        if forces is None:
+            forces = np.empty((len(self.contacts), 3))
+        if self.reduced and entry.tau_first >= 0:
+            qp_kernel.finish(entry.T, entry.t0, solution, entry.x, entry.x_prev,
+                             entry.reduced.A, entry.tau_first, entry.tau_offset, tau,
+                             layout.loaded, layout.force_start, forces)
         else:
-            entry.x[:] = solution
-        entry.x_prev[:] = entry.x
-        return entry.x
+            if self.reduced:
+                qp_kernel.expand(entry.T, entry.t0, solution, entry.x)
+            else:
+                entry.x[:] = solution
+            entry.x_prev[:] = entry.x
+            tau[:] = self.torques()
+            forces[:] = 0.0
+            forces[layout.loaded] = entry.x[layout.force_start:layout.slack_start].reshape(-1, 3)
+        return entry.x, tau
 
     def torques(self) -> np.ndarray:
         """Joint torques [N m] of the last accepted solution: ``tau = A_tau x + h_a``."""

@@ -322,3 +322,22 @@ def reduced_problem(M, h, Jc, contact_drift, contact_desired, loaded, leg_column
                                   torque_rate, H, f)
     mirror_upper(H)
     return True
+
+
+@numba.njit(cache=True)
+def finish(T, t0, z, x, x_prev, A_r, tau_first, tau_offset, tau, loaded, force_start, forces):
+    """From the reduced solution ``z``: ``x = T z + t0`` (also kept as ``x_prev``), the
+    torques ``A_r[tau rows] z + tau_offset`` and each contact's force (zero without force
+    variables)."""
+    expand(T, t0, z, x)
+    x_prev[:] = x
+    nz = z.size
+    for k in range(tau.size):
+        s = tau_offset[k]
+        for j in range(nz):
+            s += A_r[tau_first + k, j] * z[j]
+        tau[k] = s
+    forces[:, :] = 0.0
+    for idx in range(loaded.size):
+        for a in range(3):
+            forces[loaded[idx], a] = x[force_start + 3 * idx + a]

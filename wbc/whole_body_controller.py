@@ -164,7 +164,7 @@ class WholeBodyController(ContactModes):
 
     @tau_max.setter
     def tau_max(self, value: np.ndarray) -> None:
-        self.torque_limits.tau_max = as_vector("tau_max", value, _NJ)
+        self.torque_limits.tau_max = value
 
     # ------------------------------------------------------------------ composition
 
@@ -340,12 +340,11 @@ class WholeBodyController(ContactModes):
         if q.shape != (19,) or v.shape != (_NV,):
             return self._fallback(v, f"state: expected q {(self.model.nq,)} and v {(_NV,)}, "
                                      f"received {q.shape} and {v.shape}", t0)
-        if not (math.isfinite(q.sum()) and math.isfinite(v.sum())):
+        if not self.kinematics.update(q, v):  # checks q and v are finite, in compiled code
             bad = [f"q[{i}]" for i in np.flatnonzero(~np.isfinite(q))]
             bad += [f"v[{i}]" for i in np.flatnonzero(~np.isfinite(v))]
             return self._fallback(v, f"state: non-finite values at {', '.join(bad)}", t0)
         builder = self.builder
-        self.kinematics.update(q, v)
         self._q = q
         self._before_update()
         t1 = time.perf_counter()
@@ -374,16 +373,13 @@ class WholeBodyController(ContactModes):
                     return self._fallback(v, message, t0, group=group)
                 result, status = relaxed, ControlStatus.RELAXED
                 message += "; commanded the solution with that group relaxed"
-        x = builder.accept(result.x)
-        tau_qp = builder.torques()
+        forces = np.empty((_NC, 3))
+        x, tau_qp = builder.accept(result.x, forces)
         if status is not ControlStatus.OK:
             np.clip(tau_qp, -self.tau_max, self.tau_max, out=tau_qp)
         builder.tau_prev[:] = tau_qp
         self._tau_good = tau_qp
-        forces = self._forces
-        forces[:] = 0.0
-        layout = builder.layout
-        forces[layout.loaded] = x[layout.force_start:layout.slack_start].reshape(-1, 3)
+        self._forces = forces
         command = self.motor.shape(q[7:], v[6:], x[6:_NV], tau_qp)
         com, base, posture = self.com_task.error, self.base_task.error, self.posture_task.error
         task_errors = {"com": math.sqrt(com @ com), "base_orientation": math.sqrt(base @ base),
@@ -393,7 +389,7 @@ class WholeBodyController(ContactModes):
             task_errors[leg + "_foot"] = math.sqrt(error @ error)
         t4 = time.perf_counter()
         return ControlOutput(
-            **command, qdd=x[:_NV].copy(), forces=forces.copy(),
+            **command, qdd=x[:_NV].copy(), forces=forces,
             status=status, message=message,
             infeasible_group=group, task_errors=task_errors,
             timings={"model": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2,
