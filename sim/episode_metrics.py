@@ -5,15 +5,61 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+import numba
 import numpy as np
 
 from sim.simulator import Go2Simulator
 from wbc.control_output import ControlOutput
 from wbc.description import LEGS
-from wbc.support_polygon import SupportPolygon
+from wbc.support_polygon import shrunk_signed_distance
 
 #: A foot carrying less than this [N] counts as unloaded.
 LOADED_FORCE_N = 1.0
+
+_F64 = numba.float64
+
+
+@numba.njit(numba.int64(numba.boolean[::1], _F64[:, ::1], _F64[:, ::1], _F64[:, ::1], _F64,
+                        _F64[:, ::1], _F64[:, ::1], _F64[:, ::1], _F64[::1]), cache=True)
+def _feet(stance, sliding, positions, forces, dt, slid, ground, loaded, stats):
+    """One tick of the feet's measures; returns how many feet are loaded.
+
+    A stance foot integrates its sliding (``slid += sliding dt``) and its travel from
+    ``ground``; any other foot starts afresh. ``stats`` holds the running sliding maximum,
+    travel maximum and minimum stance normal force. ``loaded`` gets the positions of the
+    feet carrying more than :data:`LOADED_FORCE_N`, first rows first.
+    """
+    count = 0
+    for i in range(stance.shape[0]):
+        if stance[i]:
+            slid[i, 0] += sliding[i, 0] * dt
+            slid[i, 1] += sliding[i, 1] * dt
+            stats[0] = max(stats[0], math.sqrt(slid[i, 0] ** 2 + slid[i, 1] ** 2))
+            dx = positions[i, 0] - ground[i, 0]
+            dy = positions[i, 1] - ground[i, 1]
+            stats[1] = max(stats[1], math.sqrt(dx * dx + dy * dy))
+            stats[2] = min(stats[2], forces[i, 2])
+        else:  # a foot that leaves the ground starts afresh when it lands
+            slid[i, 0] = 0.0
+            slid[i, 1] = 0.0
+            for k in range(3):
+                ground[i, k] = positions[i, k]
+        if forces[i, 2] > LOADED_FORCE_N:
+            for k in range(3):
+                loaded[count, k] = positions[i, k]
+            count += 1
+    return count
+
+
+@numba.njit(numba.void(_F64[:], _F64[::1], _F64[:], numba.boolean, _F64[::1]), cache=True)
+def _torques(tau, previous, limit, has_previous, stats):
+    """Largest ``|tau| / limit`` into ``stats[3]``, largest jump from ``previous`` into
+    ``stats[4]``; ``previous`` becomes ``tau``."""
+    for i in range(tau.shape[0]):
+        stats[3] = max(stats[3], abs(tau[i]) / limit[i])
+        if has_previous:
+            stats[4] = max(stats[4], abs(tau[i] - previous[i]))
+        previous[i] = tau[i]
 
 
 @dataclass
@@ -61,8 +107,17 @@ class EpisodeMetrics:
         self.effort_limit = np.asarray(effort_limit, dtype=float)
         self.start_s = sim.time_s
         self._last_s = sim.time_s
-        self._sliding = {leg: np.zeros(2) for leg in LEGS}
-        self._ground = sim.foot_positions()
+        n = len(LEGS)
+        self._slid = np.zeros((n, 2))  # integrated sliding of each stance foot [m]
+        self._ground = sim.foot_position_array()  # where each stance foot stood [m]
+        self._stance = np.zeros(n, dtype=bool)
+        self._sliding = np.zeros((n, 2))
+        self._forces = np.zeros((n, 3))
+        self._positions = np.zeros((n, 3))
+        self._loaded = np.zeros((n, 3))
+        self._tau_prev = np.zeros(len(self.effort_limit))
+        #: Running sliding max, travel max, min force, torque fraction, torque jump.
+        self._stats = np.array([0.0, 0.0, math.inf, 0.0, 0.0])
         self.tracking_errors: list[float] = []
         self.holding_errors: list[float] = []
         self.sliding_max = 0.0
@@ -75,7 +130,6 @@ class EpisodeMetrics:
         self.failures = 0
         self.tick_times: list[float] = []
         self.fell = False
-        self._tau_prev: np.ndarray | None = None
         self.ticks = 0
 
     def record(self, out: ControlOutput, *, stance_legs: list[str],
@@ -91,45 +145,38 @@ class EpisodeMetrics:
             tick_time_s: Wall time of the control tick [s] (defaults to its own timing).
         """
         sim = self.sim
-        self.ticks += 1
-        dt = sim.time_s - self._last_s  # one control period, whatever the physics step
-        self._last_s = sim.time_s
+        now = sim.time_s
+        dt = now - self._last_s  # one control period, whatever the physics step
+        self._last_s = now
         if foot_error_m is not None:
             self.tracking_errors.append(foot_error_m)
             if holding:
                 self.holding_errors.append(foot_error_m)
-        sliding = sim.foot_sliding_velocities()
-        forces = sim.foot_contact_forces()
-        positions = sim.foot_positions()
-        for leg in LEGS:
-            if leg in stance_legs:
-                self._sliding[leg] += sliding[leg] * dt
-                self.sliding_max = max(self.sliding_max, float(np.linalg.norm(self._sliding[leg])))
-                travel = np.linalg.norm(positions[leg][:2] - self._ground[leg][:2])
-                self.travel_max = max(self.travel_max, float(travel))
-                self.min_force = min(self.min_force, float(forces[leg][2]))
-            else:  # a foot that leaves the ground starts afresh when it lands
-                self._sliding[leg][:] = 0.0
-                self._ground[leg] = positions[leg]
-        q, _ = sim.state()
-        loaded = [positions[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_FORCE_N]
-        com = sim.data.subtree_com[1][:2]
-        if len(loaded) >= 3:
-            margin = SupportPolygon.signed_distance(np.array(loaded), com)
+        stance = self._stance
+        for i, leg in enumerate(LEGS):
+            stance[i] = leg in stance_legs
+        stats = self._stats
+        loaded = _feet(stance, sim.foot_sliding_velocity_array(self._sliding),
+                       sim.foot_position_array(self._positions),
+                       sim.foot_contact_force_array(self._forces), dt, self._slid,
+                       self._ground, self._loaded, stats)
+        if loaded >= 3:
+            com = sim.data.subtree_com[1]
+            margin = shrunk_signed_distance(self._loaded, com, count=loaded)
             self.min_margin = min(self.min_margin, margin)
-        x, y, z, w = q[3:7]
+        q, _ = sim.state()
+        x, y, height = float(q[3]), float(q[4]), float(q[2])
         # Tilt: angle between the base's z axis and the world's.
         cos_tilt = 1.0 - 2.0 * (x * x + y * y)
         tilt = math.degrees(math.acos(max(-1.0, min(1.0, cos_tilt))))
         self.max_tilt = max(self.max_tilt, tilt)
-        if q[2] < 0.15 or tilt > 45.0:
+        if height < 0.15 or tilt > 45.0:
             self.fell = True
-        tau = out.tau
-        self.max_torque_fraction = max(self.max_torque_fraction,
-                                       float(np.max(np.abs(tau) / self.effort_limit)))
-        if self._tau_prev is not None:
-            self.max_jump = max(self.max_jump, float(np.max(np.abs(tau - self._tau_prev))))
-        self._tau_prev = tau
+        tau = np.asarray(out.tau, dtype=float)
+        _torques(tau, self._tau_prev, self.effort_limit, self.ticks > 0, stats)
+        (self.sliding_max, self.travel_max, self.min_force, self.max_torque_fraction,
+         self.max_jump) = stats.tolist()
+        self.ticks += 1
         if not out.ok:
             self.failures += 1
         elapsed = tick_time_s if tick_time_s is not None else out.timings.get("total", 0.0)

@@ -12,6 +12,7 @@ import numpy as np
 from actions.high_five_behaviour import PHASE_NAMES
 from wbc.description import JOINT_NAMES, LEGS
 from wbc.leg_lift import LiftPhase
+from wbc.support_polygon import shrunk_signed_distance
 
 if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
@@ -32,22 +33,22 @@ class TickRecorder:
     def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG):
         self.phase_of = phase_of
         self.leg = leg
+        self._row = LEGS.index(leg)
         self.rows: dict[str, list[Any]] = {k: [] for k in (
             "t_s", "q", "v", "tau", "foot_target", "foot_position", "phase",
             "contact_forces", "com_margin_m", "qp_ok", "tick_us")}
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         from sim.episode_metrics import LOADED_FORCE_N
-        from wbc.support_polygon import SupportPolygon
 
         sim = loop.sim
         phase = self.phase_of()
         # MuJoCo's contacts and positions in data are those of the tick's state (mj_step
         # computes them before integrating), so they line up with q and v below.
-        forces = sim.foot_contact_forces()
-        feet = sim.foot_positions()
-        loaded = [feet[leg][:2] for leg in LEGS if forces[leg][2] > LOADED_FORCE_N]
-        margin = (SupportPolygon.signed_distance(np.array(loaded), sim.data.subtree_com[1])
+        forces = sim.foot_contact_force_array()
+        feet = sim.foot_position_array()
+        loaded = feet[forces[:, 2] > LOADED_FORCE_N]
+        margin = (shrunk_signed_distance(loaded, sim.data.subtree_com[1])
                   if len(loaded) >= 3 else math.nan)
         tracking = phase in TRACKING_PHASES
         target = loop.controller.foot_tasks[self.leg].target if tracking else None
@@ -57,9 +58,9 @@ class TickRecorder:
         row["v"].append(np.array(loop.context.v))
         row["tau"].append(np.array(out.tau))
         row["foot_target"].append(np.full(3, np.nan) if target is None else np.array(target))
-        row["foot_position"].append(feet[self.leg])
+        row["foot_position"].append(feet[self._row])
         row["phase"].append(phase)
-        row["contact_forces"].append(np.array([forces[leg] for leg in LEGS]))
+        row["contact_forces"].append(forces)
         row["com_margin_m"].append(margin)
         row["qp_ok"].append(out.ok)
         row["tick_us"].append(out.timings.get("total", math.nan) * 1e6)
@@ -83,13 +84,15 @@ class MetricsHook:
         self.metrics = EpisodeMetrics(loop.sim, loop.controller.description.effort_limit)
         self.phase_of = phase_of
         self.leg = leg
+        self._row = LEGS.index(leg)
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         phase = self.phase_of()
         error = None
         if phase in TRACKING_PHASES:
             target = loop.controller.foot_tasks[self.leg].target
-            error = float(np.linalg.norm(loop.sim.foot_positions()[self.leg] - target))
+            foot = loop.sim.foot_position_array()[self._row]
+            error = float(np.linalg.norm(foot - target))
         self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
                             holding=phase == PHASE_NAMES[LiftPhase.HOLDING])
 
