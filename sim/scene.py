@@ -58,7 +58,7 @@ def build_go2_spec(
         )
 
     text = description.urdf_path.read_text()
-    text = re.sub(r"<visual>.*?</visual>", "", text, flags=re.S)
+    text = re.sub(r"<visual>.*?</visual>", "", text, flags=re.DOTALL)
     text = text.replace(description.mesh_uri_prefix(), f"{description.folder}/")
     spec = mujoco.MjSpec.from_string(text)
     spec.compiler.fusestatic = False  # keep the base and the foot bodies
