@@ -7,6 +7,7 @@ import time
 from dataclasses import replace
 from typing import Any
 
+import numba
 import numpy as np
 import pinocchio as pin
 
@@ -42,6 +43,13 @@ _LEG_INDEX = {leg: i for i, leg in enumerate(LEGS)}
 _ALL_LEGS = tuple(LEGS)
 #: Per-tick decay of the orientation integral while not on four loaded feet (0.1 s).
 _INTEGRAL_FADE = 0.99
+
+
+@numba.njit(cache=True)
+def _error_norms(com, base, posture, fl, fr, rl, rr):  # pragma: no cover - compiled
+    """Euclidean norms of the built-in tasks' errors: CoM, base, posture, then the feet."""
+    return (np.sqrt(com @ com), np.sqrt(base @ base), np.sqrt(posture @ posture),
+            np.sqrt(fl @ fl), np.sqrt(fr @ fr), np.sqrt(rl @ rl), np.sqrt(rr @ rr))
 
 
 class WholeBodyController(ContactModes):
@@ -156,6 +164,8 @@ class WholeBodyController(ContactModes):
         self.ticks = 0
         self.failures = 0
         self._forces = np.zeros((_NC, 3))
+        self._error_arrays = (self.com_task.error, self.base_task.error, self.posture_task.error,
+                              *(self.foot_tasks[leg].error for leg in LEGS))
 
     @property
     def tau_max(self) -> np.ndarray:
@@ -381,12 +391,10 @@ class WholeBodyController(ContactModes):
         self._tau_good = tau_qp
         self._forces = forces
         command = self.motor.shape(q[7:], v[6:], x[6:_NV], tau_qp)
-        com, base, posture = self.com_task.error, self.base_task.error, self.posture_task.error
-        task_errors = {"com": math.sqrt(com @ com), "base_orientation": math.sqrt(base @ base),
-                       "posture": math.sqrt(posture @ posture)}
+        norms = _error_norms(*self._error_arrays)
+        task_errors = {"com": norms[0], "base_orientation": norms[1], "posture": norms[2]}
         for leg in self._swing_legs:
-            error = self.foot_tasks[leg].error
-            task_errors[leg + "_foot"] = math.sqrt(error @ error)
+            task_errors[leg + "_foot"] = norms[3 + _LEG_INDEX[leg]]
         t4 = time.perf_counter()
         return ControlOutput(
             **command, qdd=x[:_NV].copy(), forces=forces,
