@@ -7,8 +7,6 @@ built-in centre-of-mass task keeps the CoM over the feet on x and y.
 
 from __future__ import annotations
 
-import numpy as np
-
 from sim.simulator import Go2Simulator
 from tasks import RobotKinematics, Task
 from wbc import WholeBodyController

@@ -6,8 +6,7 @@ import pytest
 
 from tasks.task_kernels import log3
 from tests.conftest import random_configuration
-from wbc import WholeBodyController
-from wbc import qp_kernel
+from wbc import WholeBodyController, qp_kernel
 from wbc.backends.daqp_backend import DaqpBackend
 from wbc.description import LEGS
 
