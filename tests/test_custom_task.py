@@ -7,9 +7,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from tasks import RobotKinematics, Task
+from tasks import Constraint, RobotKinematics, Task
 from tests.conftest import random_configuration
 from wbc import WholeBodyController
+from wbc.backends import INFINITY
 from wbc.errors import ConfigurationError
 
 _PATH = Path(__file__).resolve().parents[1] / "examples" / "custom_task.py"
@@ -88,3 +89,40 @@ def test_registration_errors_name_the_problem():
     assert task not in controller.tasks
     ok = WholeBodyController(extra_frames=("FR_calf",))
     ok.add_task(_CalfTask())
+
+
+class _ComAccelerationAtLeast(Constraint):
+    """The CoM's world x acceleration [m/s^2] at least ``minimum``: one row on qdd."""
+
+    name = "com acceleration"
+
+    def __init__(self, minimum):
+        self.minimum = minimum
+
+    def rows(self, layout):
+        return 1
+
+    def update(self, kinematics, layout, block):
+        block.A[0, :layout.nv] = kinematics.com_jacobian[0]
+        block.lower[0] = self.minimum - kinematics.com_drift[0]
+        block.upper[0] = INFINITY
+
+
+@pytest.mark.parametrize("eliminate", [True, False])
+def test_a_user_constraint_binds_in_the_reduced_and_the_full_qp(description, eliminate):
+    controller = WholeBodyController(eliminate_dynamics=eliminate)
+    q = description.pose("standing")
+    controller.reset(q)
+    free = controller.step(q, np.zeros(18))
+    com_acceleration = controller.kinematics.com_jacobian[0] @ free.qdd
+    assert abs(com_acceleration) < 0.1    # holding still: no reason to accelerate
+    controller.add_constraint(_ComAccelerationAtLeast(0.5))
+    out = controller.step(q, np.zeros(18))
+    assert out.ok, out.message
+    assert controller.builder.reduced is eliminate
+    com_acceleration = (controller.kinematics.com_jacobian[0] @ out.qdd
+                        + controller.kinematics.com_drift[0])
+    assert com_acceleration == pytest.approx(0.5, abs=1e-6)   # active, and satisfied
+    eq, ineq = controller.problem.violations(controller.last_solution)
+    assert eq < 1e-8 and ineq < 1e-8
+    assert "com acceleration" in controller.problem.row_groups

@@ -165,6 +165,7 @@ class ProblemBuilder:
         self._loaded = self.contacts
         self._layouts: dict[tuple, _LayoutProblem] = {}
         self._current: _LayoutProblem | None = None
+        self._last: _LayoutProblem | None = None
         self._stack_tasks()
         #: Torques [N m] the torque-rate cost pulls towards (the last command's).
         self.tau_prev = np.zeros(self.nv - 6)
@@ -315,8 +316,6 @@ class ProblemBuilder:
             self._current = entry
             self._last = entry
         return self._current
-
-    _last: _LayoutProblem | None = None
 
     # ------------------------------------------------------------------ the tick
 
