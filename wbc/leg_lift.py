@@ -151,7 +151,11 @@ class LegLift:
         self._from = self._com_ref.copy()
         self._to = self.com_shifted
 
+    #: The foot target last set while holding (``None``: set it on the next hold tick).
+    _held: np.ndarray | None = None
+
     def _enter(self, phase: LiftPhase, now_s: float, *, duration: float) -> None:
+        self._held = None
         self.phase = phase
         self._t0 = now_s
         self._duration = max(duration, 1e-3)
@@ -209,7 +213,10 @@ class LegLift:
                 self._from, self._to = self._com_ref.copy(), self.com_home
                 self._shift_t0 = now_s
         elif phase is LiftPhase.HOLDING:
-            ctrl.set_foot_target(self.leg, self.foot_target)
+            held = self.foot_target
+            if self._held is None or not np.array_equal(self._held, held):
+                ctrl.set_foot_target(self.leg, held)   # at rest there: set on change only
+                self._held = held.copy()
             if done:
                 self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         elif phase is LiftPhase.RELOADING:

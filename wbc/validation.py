@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from typing import Any
 
@@ -23,17 +24,22 @@ def as_vector(name: str, value: Any, size: int, *, finite: bool = True) -> np.nd
         ConfigurationError: Wrong shape or not numeric.
         NonFiniteError: A NaN or infinite entry when ``finite`` is set.
     """
-    try:
-        array = np.array(value, dtype=np.float64)  # a copy: callers keep their own arrays
-    except (TypeError, ValueError) as err:
-        raise ConfigurationError(
-            f"{name}: expected {size} numbers, received {value!r}"
-        ) from err
-    if array.shape != (size,):
-        raise ConfigurationError(
-            f"{name}: expected an array of shape ({size},), received shape {array.shape}"
-        )
-    if finite and not np.all(np.isfinite(array)):
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (size,):
+        array = value.copy()  # the common case, without NumPy's conversion machinery
+    else:
+        try:
+            array = np.array(value, dtype=np.float64)  # a copy: callers keep their own arrays
+        except (TypeError, ValueError) as err:
+            raise ConfigurationError(
+                f"{name}: expected {size} numbers, received {value!r}"
+            ) from err
+        if array.shape != (size,):
+            raise ConfigurationError(
+                f"{name}: expected an array of shape ({size},), received shape {array.shape}"
+            )
+    # A finite dot product means finite entries; only when it is not (a NaN, an infinity,
+    # or an overflow of huge finite values) are the entries checked one by one.
+    if finite and not math.isfinite(array @ array) and not np.all(np.isfinite(array)):
         bad = np.flatnonzero(~np.isfinite(array)).tolist()
         raise NonFiniteError(f"{name}: non-finite value at index {bad}: {array.tolist()}")
     return array

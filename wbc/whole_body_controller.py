@@ -321,6 +321,15 @@ class WholeBodyController(ContactModes):
         self.foot_tasks[leg].set_feedforward(np.zeros(3) if acceleration is None else acceleration)
 
     def _contact_mode_changed(self, leg: str) -> None:
+        i = _LEG_INDEX[leg]
+        if self._stance[leg] == self._stance_applied[i]:
+            # Only a force bound changed (a foot being unloaded or reloaded, every tick):
+            # the layout and the gains stay; the polygon changes when the support set does.
+            self.friction.max_force[i] = self._max_force[leg] if self._stance[leg] else 0.0
+            support = tuple(self.support_legs())
+            if support != self._support:
+                self._support, self._support_key = support, None
+            return
         self._contacts_changed()
 
     def _base_placement(self) -> tuple[np.ndarray, np.ndarray] | None:
@@ -436,6 +445,7 @@ class WholeBodyController(ContactModes):
             self.motor.set_stance(i, self._stance[leg])
             self.friction.max_force[i] = self._max_force[leg] if self._stance[leg] else 0.0
             self.builder.set_active(self.foot_tasks[leg], not self._stance[leg])
+        self._stance_applied = [self._stance[leg] for leg in LEGS]
         self._swing_legs = [leg for leg in LEGS if not self._stance[leg]]
         self.builder.set_loaded_contacts([leg for leg in LEGS if self._stance[leg]])
         self._support = tuple(self.support_legs())
