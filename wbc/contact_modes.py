@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
@@ -153,10 +155,13 @@ class ContactModes:
         """
         check_name("leg", leg, LEGS)
         position = as_vector(f"{leg}_foot target", position, 3)
-        if self._base_placement() is None:
+        placement = self._base_placement()
+        if placement is None:
             return position
-        shoulder = self.shoulder_position(leg)
-        distance = float(np.linalg.norm(position - shoulder))
+        rotation, base = placement
+        shoulder = rotation @ self._shoulder_in_base[leg] + base
+        offset = position - shoulder
+        distance = math.sqrt(offset @ offset)
         if distance > LEG_REACH_M and clamp_to_reach:
             return shoulder + (position - shoulder) * (LEG_REACH_M / distance)
         if distance > LEG_REACH_M:

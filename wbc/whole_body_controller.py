@@ -335,7 +335,7 @@ class WholeBodyController(ContactModes):
     def _base_placement(self) -> tuple[np.ndarray, np.ndarray] | None:
         if self._q is None:
             return None
-        return self.kinematics.base_rotation.copy(), self.kinematics.base_position.copy()
+        return self.kinematics.base_rotation, self.kinematics.base_position  # read-only
 
     def normal_force(self, leg: str) -> float:
         """The normal force [N] the last solved tick gave a foot (0 before any)."""
