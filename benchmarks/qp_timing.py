@@ -2,7 +2,7 @@
 
 Run ``python -m benchmarks.qp_timing [--quick] [--json PATH] [--plot PATH]``.
 
-Three tables, all measured through the library's public API:
+Four tables, all measured through the library's public API:
 
 1. Backends: one closed-loop episode per backend (200 standing warm-up ticks, excluded from
    the statistics, then a ``LegLift`` of leg FR to 0.40 m at 1 kHz, motor commands to the
@@ -10,10 +10,13 @@ Three tables, all measured through the library's public API:
    returned QP solution is checked against the problem it solved. The full mode runs the
    whole lift with a 2 s hold; ``--quick`` shifts in 0.5 s, unloads in 0.3 s and stops after 1.0 s of the lift
    (the first 0.2 s of the raise), so that the one-shot OSQP (~4 ms a tick) stays short.
-2. Scaling: tick time against the number of contacts (four feet standing; three with the
+2. Alone, on recorded states: one closed-loop lift's measured states replayed into fresh
+   controllers (the default; DAQP with its hot start; the full QP without the elimination;
+   PlaCo), with no simulation between ticks: the controller's own time, caches warm.
+3. Scaling: tick time against the number of contacts (four feet standing; three with the
    foot held up) and with the swing-foot task's weight set to zero, for the default
    backend and PlaCo (reaching the hold with faster phases: only the hold is timed).
-3. Episode quality of the default backend over a whole lift (hold 2 s, or 0.3 s in quick
+4. Episode quality of the default backend over a whole lift (hold 2 s, or 0.3 s in quick
    mode): tracking, slip, forces, margins, torques, failures, real-time factor.
 """
 
@@ -290,8 +293,11 @@ def _qp_size(controller: BalanceController) -> str:
         p = controller.solver.problem
         return (f"{p.n_variables} var ({p.free_variables} free), "
                 f"{p.n_inequalities} ineq")
-    p = controller.problem  # type: ignore[attr-defined]
-    return f"{p.n} var, {p.m} rows + bounds"
+    builder = controller.builder  # type: ignore[attr-defined]
+    full, solved = builder.problem, builder.reduced_problem
+    if solved is None or not builder.reduced:
+        return f"{full.n} var, {full.m} rows + bounds"
+    return f"{solved.n} var, {solved.m} rows (reduced from {full.n} var, {full.m} rows)"
 
 
 def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
@@ -580,11 +586,11 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
          "shared the cores and the wall-clock p90-max columns measure their preemptions."),
         ("Before the first row, one short episode of the default controller warms the process "
          "up (imports, caches) and is discarded. Times depend on the machine's load."),
-        ("Scaling: the WholeBodyController QP has a fixed size whatever the contacts (a swing "
-         "foot's rows are unbounded) and assembles a swing task even at weight 0 "
-         "(set_foot_weight), so that row shows the solver's share only; PlaCo's QP loses a "
-         "contact's 3 force variables and 5 rows. At weight 0 the foot droops under the "
-         "posture task."),
+        ("Scaling: a foot in the air has no force variables in either controller's QP; "
+         "WholeBodyController then eliminates the dynamics and the stance contacts, so the "
+         "solver sees 13 variables on three or four feet. A swing task at weight 0 "
+         "(set_foot_weight) stays registered; at weight 0 the foot droops under the posture "
+         "task."),
         ("Episode quality: sim.episode_metrics (MuJoCo-measured; stance feet are the fully "
          "loaded ones, the CoM margin is over the feet MuJoCo sees loaded), raised-foot error "
          "against the controller's foot target. Real-time factor: the lift's sim time over "

@@ -283,6 +283,11 @@ class ProblemBuilder:
         return entry.full
 
     @property
+    def reduced_problem(self) -> QpProblem | None:
+        """The reduced QP of the current layout (``None`` when it cannot be reduced)."""
+        return self._problem().reduced
+
+    @property
     def solution(self) -> np.ndarray:
         """The last solution ``x`` (zeros before any)."""
         return self._problem().x
