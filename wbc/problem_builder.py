@@ -293,6 +293,9 @@ class ProblemBuilder:
         return self._problem().x
 
     def _problem(self) -> _LayoutProblem:
+        current = self._current
+        if current is not None:
+            return current
         if self._current is None:
             slacks = tuple(s for c in self.constraints for s in c.slacks)
             key = (self._loaded, slacks)

@@ -49,22 +49,27 @@ class DaqpBackend(QpBackend):
         self.hot_start = hot_start
         self._sense = np.zeros(0, dtype=np.int32)
         self._base_sense = np.zeros(0, dtype=np.int32)
-        self._structure: tuple[int, int, int] | None = None
+        self._problem: QpProblem | None = None
+        self._version = -1
 
     def setup(self, problem: QpProblem) -> None:
         self._sense = np.zeros(problem.n + problem.m, dtype=np.int32)
         self._sense[problem.n:][problem.is_equality] = _EQUALITY
         self._base_sense = self._sense.copy()
-        self._structure = (problem.n, problem.m, problem.structure_version)
+        self._problem, self._version = problem, problem.structure_version
 
     def solve(self, problem: QpProblem) -> QpResult:
-        if self._structure != (problem.n, problem.m, problem.structure_version):
+        if problem is not self._problem or problem.structure_version != self._version:
             self.setup(problem)
+        settings = self.settings
         start = time.perf_counter()
         x, _, exitflag, info = daqp.solve(problem.H, problem.f, problem.A, problem.bupper,
-                                          problem.blower, self._sense, **self.settings)
+                                          problem.blower, self._sense,
+                                          primal_tol=settings["primal_tol"],
+                                          iter_limit=settings["iter_limit"])
         elapsed = time.perf_counter() - start
-        found = (exitflag == 1 or exitflag == 2) and math.isfinite(x.sum())
+        # A finite dot product means a finite solution (cheaper than a sum at this size).
+        found = (exitflag == 1 or exitflag == 2) and math.isfinite(x @ x)
         if self.hot_start:  # the next solve starts from this active set (a solved one only)
             np.copyto(self._sense, self._base_sense)
             if found:
