@@ -130,7 +130,7 @@ def add_action_commands(sub: Any) -> None:
     """
     send = sub.add_parser(
         "send-goal", help="send a goal given as YAML to any action (ros2 action send_goal)",
-        description="Send a goal, given as a YAML mapping, to an action of a simulated GO2 "
+        description="Send a goal, given as a YAML mapping, to an action of a simulated GO2\n"
                     "and print its id, acceptance, feedback and result, like ros2 action "
                     "send_goal.",
         epilog=SEND_GOAL_HELP + EXIT_CODES_HELP,
