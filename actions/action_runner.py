@@ -22,11 +22,11 @@ and never break the tick.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from concurrent.futures import Future, InvalidStateError
-from contextlib import contextmanager
 from enum import Enum
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -326,19 +326,25 @@ class ActionRunner:
             ConfigurationError: ``now_s`` is not finite or is earlier than the previous tick.
             ActionUsageError: Called from inside a tick callback.
         """
-        with self._tick_section(now_s):
-            self._tick_count += 1
-            if self._shut_down:
-                return
-            with self._lock:
-                requests, self._requests = self._requests, []
-            for request in requests:
-                if isinstance(request, GoalRecord):
-                    self._process_goal_request(request)
-                else:
-                    self._process_cancel_request(request)
-            self._start_next()
-            self._step_active()
+        self._refuse_reentry()
+        with self._tick_lock:
+            self._enter_tick(now_s)
+            try:
+                self._tick_count += 1
+                if self._shut_down:
+                    return
+                if self._requests:  # a request appended meanwhile waits for the next tick
+                    with self._lock:
+                        requests, self._requests = self._requests, []
+                    for request in requests:
+                        if isinstance(request, GoalRecord):
+                            self._process_goal_request(request)
+                        else:
+                            self._process_cancel_request(request)
+                self._start_next()
+                self._step_active()
+            finally:
+                self._tick_thread = None
 
     def shutdown(self, now_s: float) -> None:
         """End every unfinished goal ABORTED and refuse new goals. Idempotent.
@@ -353,49 +359,56 @@ class ActionRunner:
         """
         if self._shut_down:
             return
-        with self._tick_section(now_s):
-            with self._lock:
-                if self._shut_down:
-                    return
-                self._shut_down = True
-                requests, self._requests = self._requests, []
-            reason = f"runner shut down at t={now_s:g} s"
-            self._log("", "shutdown", reason)
-            for request in requests:
-                if isinstance(request, GoalRecord):
-                    self._reject(request, self._shut_down_rejection())
-            active = self._active
-            if active is not None:
-                if active.status == GoalStatus.EXECUTING:
-                    self._call_cancel(active, reason)
-                if self._active is active:
-                    self._abort(active, f"{reason} while the goal was {active.status.name}")
-            while self._queue:
-                self._abort(self._queue.popleft(), f"{reason} before the goal started")
-            for request in requests:
-                if isinstance(request, _CancelRequest):
-                    self._process_cancel_request(request)
+        self._refuse_reentry()
+        with self._tick_lock:
+            self._enter_tick(now_s)
+            try:
+                self._shut_down_now(now_s)
+            finally:
+                self._tick_thread = None
 
-    @contextmanager
-    def _tick_section(self, now_s: float) -> Iterator[None]:
-        if self.in_tick_thread():
+    def _shut_down_now(self, now_s: float) -> None:
+        """The body of :meth:`shutdown`, inside the tick section."""
+        with self._lock:
+            if self._shut_down:
+                return
+            self._shut_down = True
+            requests, self._requests = self._requests, []
+        reason = f"runner shut down at t={now_s:g} s"
+        self._log("", "shutdown", reason)
+        for request in requests:
+            if isinstance(request, GoalRecord):
+                self._reject(request, self._shut_down_rejection())
+        active = self._active
+        if active is not None:
+            if active.status == GoalStatus.EXECUTING:
+                self._call_cancel(active, reason)
+            if self._active is active:
+                self._abort(active, f"{reason} while the goal was {active.status.name}")
+        while self._queue:
+            self._abort(self._queue.popleft(), f"{reason} before the goal started")
+        for request in requests:
+            if isinstance(request, _CancelRequest):
+                self._process_cancel_request(request)
+
+    def _refuse_reentry(self) -> None:
+        if self._tick_thread == threading.get_ident():
             raise ActionUsageError(
                 "ActionRunner.tick/shutdown called from inside a tick callback; call it from "
                 "the control loop, after the current tick returns"
             )
-        with self._tick_lock:
-            if not is_finite_real(now_s):
-                raise ConfigurationError(f"now_s must be a finite time [s]; received {now_s!r}")
-            if self._now_s is not None and now_s < self._now_s:
-                raise ConfigurationError(
-                    f"now_s must not go backwards: received {now_s!r} after {self._now_s!r}"
-                )
-            self._now_s = float(now_s)
-            self._tick_thread = threading.get_ident()
-            try:
-                yield
-            finally:
-                self._tick_thread = None
+
+    def _enter_tick(self, now_s: float) -> None:
+        """Check and record the tick's time; mark this thread as ticking (under the lock)."""
+        # A float is the common case: checked without the numbers ABC.
+        if not (type(now_s) is float and math.isfinite(now_s)) and not is_finite_real(now_s):
+            raise ConfigurationError(f"now_s must be a finite time [s]; received {now_s!r}")
+        if self._now_s is not None and now_s < self._now_s:
+            raise ConfigurationError(
+                f"now_s must not go backwards: received {now_s!r} after {self._now_s!r}"
+            )
+        self._now_s = float(now_s)
+        self._tick_thread = threading.get_ident()
 
     # --- requests ------------------------------------------------------------------------
 

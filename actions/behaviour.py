@@ -51,6 +51,8 @@ class StepResult(Generic[ResultT, FeedbackT]):
     @classmethod
     def running(cls, feedback: FeedbackT | None = None) -> StepResult[ResultT, FeedbackT]:
         """The goal goes on; optionally publish ``feedback``."""
+        if feedback is None and cls is StepResult:
+            return _GOES_ON  # most ticks: one shared instance (it is frozen)
         return cls(feedback=feedback)
 
     @classmethod
@@ -78,6 +80,9 @@ class StepResult(Generic[ResultT, FeedbackT]):
     def done(self) -> bool:
         """Whether the goal ended on this step."""
         return self.status is not None
+
+
+_GOES_ON: StepResult = StepResult()
 
 
 class Behaviour(ABC, Generic[GoalT, ResultT, FeedbackT]):
