@@ -50,6 +50,9 @@ class FramePositionTask(Task):
         """Set the target position [m] and velocity [m/s] on the task's axes; copies them."""
         self._set_reference(self.frame, position, velocity)
 
+    def _field(self) -> str:
+        return self.frame
+
     def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
         self._require_target()
         k = kinematics

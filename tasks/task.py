@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import numba
 import numpy as np
 
 from wbc.errors import ConfigurationError
@@ -12,6 +13,24 @@ from wbc.validation import as_float, as_vector
 
 if TYPE_CHECKING:
     from tasks.kinematics import RobotKinematics
+
+
+@numba.njit("b1(f8[:, ::1], f8[:], f8[:], f8[:])", cache=True)
+def _store_motion(reference, target, velocity, feedforward):  # pragma: no cover - compiled
+    """Copy the three vectors into the rows of ``reference`` (3, dim) if each has ``dim``
+    finite entries; whether it did (nothing is written when not)."""
+    n = reference.shape[1]
+    if target.size != n or velocity.size != n or feedforward.size != n:
+        return False
+    for i in range(n):
+        if not (math.isfinite(target[i]) and math.isfinite(velocity[i])
+                and math.isfinite(feedforward[i])):
+            return False
+    for i in range(n):
+        reference[0, i] = target[i]
+        reference[1, i] = velocity[i]
+        reference[2, i] = feedforward[i]
+    return True
 
 
 class Task:
@@ -56,6 +75,7 @@ class Task:
         self.nv = nv
         self.gains = np.zeros(3)
         self.reference = np.zeros((3, self.dim))
+        self._zeros = np.zeros(self.dim)  # the default velocity and feed-forward; never written
         self._has_target = False
         self.set_gains(kp=kp, kd=kd)
         self.set_weight(weight)
@@ -114,13 +134,41 @@ class Task:
         self.reference[2] = as_vector(f"{type(self).__name__}.feedforward", acceleration,
                                       self.dim)
 
-    def _set_reference(self, name: str, target: np.ndarray,
-                       velocity: np.ndarray | None) -> None:
-        """Validate both, then store both (a rejected value leaves the old ones)."""
+    def set_motion(self, target: np.ndarray, velocity: np.ndarray | None = None,
+                   feedforward: np.ndarray | None = None) -> None:
+        """Set the target, its velocity and the feed-forward acceleration together.
+
+        For a reference that moves every tick (a trajectory): float64 vectors of ``dim``
+        finite entries are checked and copied in one compiled call; anything else is
+        converted and validated as :meth:`set_target` does. ``None`` is zero. A rejected
+        value leaves all three as they were.
+        """
+        self._set_reference(self._field(), target, velocity, self._zeros
+                            if feedforward is None else feedforward)
+
+    def _field(self) -> str:
+        """The name error messages give this task's references."""
+        return type(self).__name__
+
+    def _set_reference(self, name: str, target: np.ndarray, velocity: np.ndarray | None,
+                       feedforward: np.ndarray | None = None) -> None:
+        """Validate, then store the target, its velocity (``None``: zero) and, when given,
+        the feed-forward; a rejected value leaves all of them as they were."""
+        reference = self.reference
+        if velocity is None:
+            velocity = self._zeros
+        if feedforward is None:
+            feedforward = reference[2]  # kept: copied onto itself
+        try:
+            if _store_motion(reference, target, velocity, feedforward):
+                self._has_target = True
+                return
+        except TypeError:  # not float64 vectors: converted below
+            pass
         target = as_vector(f"{name}.target", target, self.dim)
-        velocity = np.zeros(self.dim) if velocity is None else as_vector(
-            f"{name}.target_velocity", velocity, self.dim)
-        self.reference[0], self.reference[1] = target, velocity
+        velocity = as_vector(f"{name}.target_velocity", velocity, self.dim)
+        feedforward = as_vector(f"{name}.feedforward", feedforward, self.dim)
+        reference[0], reference[1], reference[2] = target, velocity, feedforward
         self._has_target = True
 
     def bind(self, kinematics: RobotKinematics) -> None:

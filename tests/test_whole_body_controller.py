@@ -4,11 +4,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from tasks import ContactTask, RobotKinematics
 from tests.conftest import random_configuration
 from wbc import ControllerConfig, WholeBodyController
 from wbc.backends import available_backends
 from wbc.control_output import ControlStatus
-from tasks import ContactTask, RobotKinematics
 from wbc.description import FOOT_RADIUS_M, LEGS
 from wbc.errors import ConfigurationError, NonFiniteError, ReachabilityError, UnknownNameError
 
@@ -147,6 +147,40 @@ def test_unreachable_foot_target_raises_and_keeps_old_target(controller, standin
     np.testing.assert_array_equal(controller.foot_tasks["FR"].target, old)
     with pytest.raises(NonFiniteError):
         controller.set_com_target([0.0, np.nan, 0.3])
+
+
+def test_references_are_set_all_or_nothing(controller, standing):
+    """A trajectory's target, velocity and feed-forward are stored together (float64 vectors
+    by the compiled path, anything else converted); a bad one leaves all three unchanged."""
+    controller.step(standing, np.zeros(18))
+    foot = controller.foot_position("FR") + [0.0, 0.0, 0.05]
+    controller.set_foot_target("FR", foot, np.array([0.0, 0.0, 0.1]), np.array([0.0, 0.0, 1.0]))
+    task = controller.foot_tasks["FR"]
+    np.testing.assert_array_equal(task.reference, [foot, [0.0, 0.0, 0.1], [0.0, 0.0, 1.0]])
+    foot[2] += 0.01  # the caller's array is not held
+    assert task.target[2] == pytest.approx(foot[2] - 0.01)
+    before = task.reference.copy()
+    for bad, match in ((([0.1, 0.0, np.inf]), "FR_foot.target_velocity: non-finite"),
+                       ((0.0, 0.0), "FR_foot.target_velocity: expected an array of shape")):
+        with pytest.raises(ConfigurationError, match=match):
+            controller.set_foot_target("FR", foot, np.array(bad), None)
+    with pytest.raises(NonFiniteError, match="FR_foot.feedforward: non-finite"):
+        controller.set_foot_target("FR", foot, None, np.array([np.nan, 0.0, 0.0]))
+    np.testing.assert_array_equal(task.reference, before)
+    controller.set_com_target([0.0, 0.01, 0.3], [0, 0, 0], [0, 0, 0])  # lists: converted
+    np.testing.assert_array_equal(controller.com_target, [0.0, 0.01, 0.3])
+    with pytest.raises(ConfigurationError, match="ComTask.feedforward: expected an array"):
+        controller.set_com_target(np.zeros(3), np.zeros(3), np.zeros(2))
+    np.testing.assert_array_equal(controller.com_target, [0.0, 0.01, 0.3])
+
+
+def test_foot_positions_are_the_feet_in_leg_order(controller, standing):
+    controller.step(standing, np.zeros(18))
+    feet = controller.foot_positions()
+    for i, leg in enumerate(LEGS):
+        np.testing.assert_array_equal(feet[i], controller.foot_position(leg))
+    with pytest.raises(ValueError):
+        feet[0, 0] = 1.0  # a read-only view of the controller's kinematics
 
 
 def test_bad_parameters_are_named():

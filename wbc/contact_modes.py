@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 import pinocchio as pin
 
@@ -14,6 +15,22 @@ from wbc.validation import as_float, as_vector, check_name
 
 #: Thigh + calf length of a GO2 leg [m], less a margin that keeps the knee bent.
 LEG_REACH_M = 0.40
+
+
+@numba.njit("f8(f8[:, :], f8[:], f8[::1], f8[:])", cache=True)
+def _shoulder_distance(rotation, base, shoulder_in_base, position):  # pragma: no cover
+    """Distance [m] from the shoulder (``base + rotation @ shoulder_in_base``) to ``position``;
+    NaN when ``position`` is not 3 finite numbers."""
+    if position.size != 3:
+        return math.nan
+    total = 0.0
+    for r in range(3):
+        shoulder = base[r]
+        for c in range(3):
+            shoulder += rotation[r, c] * shoulder_in_base[c]
+        offset = position[r] - shoulder
+        total += offset * offset
+    return math.sqrt(total)  # NaN or inf for a non-finite position
 
 
 class ContactModes:
@@ -38,8 +55,8 @@ class ContactModes:
         # The shoulder is fixed to the base: where the thigh joint sits in the standing pose
         # (the thigh joint itself swings with the hip's abduction).
         self._shoulder_in_base = {
-            leg: standing.oMi[1].actInv(
-                standing.oMi[model.getJointId(f"{leg}_thigh_joint")].translation)
+            leg: np.array(standing.oMi[1].actInv(
+                standing.oMi[model.getJointId(f"{leg}_thigh_joint")].translation), dtype=float)
             for leg in LEGS
         }
 
@@ -149,16 +166,24 @@ class ContactModes:
                           clamp_to_reach: bool) -> np.ndarray:
         """The validated foot target: clamped onto the leg's reach, or refused beyond it.
 
+        It may be ``position`` itself (not a copy): callers copy it into their task.
+
         Raises:
             ReachabilityError: Farther than :data:`LEG_REACH_M` from the shoulder (unless
                 clamping); nothing is changed.
         """
         check_name("leg", leg, LEGS)
-        position = as_vector(f"{leg}_foot target", position, 3)
         placement = self._base_placement()
         if placement is None:
-            return position
+            return as_vector(f"{leg}_foot target", position, 3)
         rotation, base = placement
+        try:  # float64 vectors, every tick of a swing: one compiled call, no copy
+            if _shoulder_distance(rotation, base, self._shoulder_in_base[leg],
+                                  position) <= LEG_REACH_M:
+                return position
+        except TypeError:
+            pass
+        position = as_vector(f"{leg}_foot target", position, 3)
         shoulder = rotation @ self._shoulder_in_base[leg] + base
         offset = position - shoulder
         distance = math.sqrt(offset @ offset)

@@ -11,7 +11,7 @@ from wbc.balance_controller import BalanceController
 from wbc.contact_modes import LEG_REACH_M
 from wbc.description import LEGS
 from wbc.errors import ConfigurationError, ReachabilityError
-from wbc.min_jerk import min_jerk, min_jerk_segment
+from wbc.min_jerk import min_jerk, min_jerk_reference
 from wbc.support_polygon import SupportPolygon
 from wbc.validation import as_float, check_name
 
@@ -109,6 +109,9 @@ class LegLift:
         self.interrupted = False
         self.urgent = False
         self._progress = 0.0
+        # Position, velocity and acceleration rows of the references set every tick.
+        self._com_motion = np.zeros((3, 3))
+        self._foot_motion = np.zeros((3, 3))
 
     # ------------------------------------------------------------------ planning
 
@@ -152,7 +155,7 @@ class LegLift:
         self._to = self.com_shifted
 
     #: The foot target last set while holding (``None``: set it on the next hold tick).
-    _held: np.ndarray | None = None
+    _held: list[float] | None = None
 
     def _enter(self, phase: LiftPhase, now_s: float, *, duration: float) -> None:
         self._held = None
@@ -213,10 +216,10 @@ class LegLift:
                 self._from, self._to = self._com_ref.copy(), self.com_home
                 self._shift_t0 = now_s
         elif phase is LiftPhase.HOLDING:
-            held = self.foot_target
-            if self._held is None or not np.array_equal(self._held, held):
-                ctrl.set_foot_target(self.leg, held)   # at rest there: set on change only
-                self._held = held.copy()
+            held = self.foot_target.tolist()
+            if held != self._held:
+                ctrl.set_foot_target(self.leg, self.foot_target)  # at rest: set on change only
+                self._held = held
             if done:
                 self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         elif phase is LiftPhase.RELOADING:
@@ -237,9 +240,10 @@ class LegLift:
 
     def _track_com(self, elapsed: float, duration: float | None = None) -> None:
         duration = self._duration if duration is None else duration
-        p, v, a = min_jerk_segment(self._from, self._to, elapsed, duration)
-        self._com_ref = p
-        self.controller.set_com_target(p, v, a)
+        motion = self._com_motion
+        min_jerk_reference(motion, self._from, self._to, elapsed, duration, 0.0, 1.0)
+        self._com_ref = motion[0]
+        self.controller.set_com_target(motion[0], motion[1], motion[2])
 
     def _start_foot_motion(self, now_s: float, phase: LiftPhase, end: np.ndarray,
                            nominal_s: float) -> None:
@@ -258,20 +262,11 @@ class LegLift:
         Rising, the horizontal motion starts after a quarter of the time (the foot leaves
         the ground vertically); lowering, it ends a quarter early (the foot lands vertically).
         """
-        tau = elapsed / self._duration
-        T = self._duration
-        if lead_z:
-            txy, kxy = (tau - 0.25) / 0.75, 1.0 / (0.75 * T)
-        else:
-            txy, kxy = tau / 0.75, 1.0 / (0.75 * T)
-        sz, dsz, ddsz = min_jerk(tau)
-        sxy, dsxy, ddsxy = min_jerk(txy)
-        delta = self._to - self._from
-        scale = np.array([sxy, sxy, sz])
-        rate = np.array([dsxy * kxy, dsxy * kxy, dsz / T])
-        accel = np.array([ddsxy * kxy * kxy, ddsxy * kxy * kxy, ddsz / (T * T)])
-        self._foot_ref = self._from + scale * delta
-        self.controller.set_foot_target(self.leg, self._foot_ref, rate * delta, accel * delta,
+        motion = self._foot_motion
+        min_jerk_reference(motion, self._from, self._to, elapsed, self._duration,
+                           0.25 if lead_z else 0.0, 0.75)
+        self._foot_ref = motion[0]
+        self.controller.set_foot_target(self.leg, motion[0], motion[1], motion[2],
                                         clamp_to_reach=self.interrupted)
 
     @classmethod
@@ -354,6 +349,23 @@ class LegLift:
 
     # ------------------------------------------------------------------ progress
 
+    #: Each phase's start and duration [s] on the uninterrupted plan (``None``: the whole).
+    _phase_offsets: dict[LiftPhase | None, tuple[float, float]] | None = None
+
+    def _plan_phase_offsets(self) -> dict[LiftPhase | None, tuple[float, float]]:
+        t = self.timing
+        order = [(LiftPhase.SHIFTING, t.shift_s), (LiftPhase.UNLOADING, t.unload_s),
+                 (LiftPhase.RAISING, t.raise_s), (LiftPhase.HOLDING, self.hold_s),
+                 (LiftPhase.LOWERING, t.lower_s), (LiftPhase.RELOADING, t.reload_s),
+                 (LiftPhase.SHIFTING_BACK, t.shift_back_s)]
+        offsets: dict[LiftPhase | None, tuple[float, float]] = {}
+        start = 0.0
+        for phase, duration in order:
+            offsets[phase] = (start, duration)
+            start += duration
+        offsets[None] = (self.nominal_duration_s, 0.0)
+        return offsets
+
     @property
     def progress(self) -> float:
         """Fraction of the lift done, 0 to 1, never decreasing (also across an interrupt)."""
@@ -369,16 +381,10 @@ class LegLift:
             start = getattr(self, "_progress_at_interrupt", self._progress)
             estimate = start + (1.0 - start) * fraction
         else:
-            t = self.timing
-            order = [(LiftPhase.SHIFTING, t.shift_s), (LiftPhase.UNLOADING, t.unload_s),
-                     (LiftPhase.RAISING, t.raise_s), (LiftPhase.HOLDING, self.hold_s),
-                     (LiftPhase.LOWERING, t.lower_s), (LiftPhase.RELOADING, t.reload_s),
-                     (LiftPhase.SHIFTING_BACK, t.shift_back_s)]
-            done = 0.0
-            for phase, duration in order:
-                if phase is self.phase:
-                    done += min(max(now_s - self._t0, 0.0), duration)
-                    break
-                done += duration
-            estimate = min(done / self.nominal_duration_s, 0.999)
+            offsets = self._phase_offsets
+            if offsets is None:
+                offsets = self._phase_offsets = self._plan_phase_offsets()
+            start, duration = offsets[self.phase]
+            done = start + min(max(now_s - self._t0, 0.0), duration)
+            estimate = min(done / offsets[None][0], 0.999)
         self._progress = max(self._progress, estimate)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 
+@numba.njit(cache=True)
 def min_jerk(tau: float) -> tuple[float, float, float]:
     """Phase ``s``, ``ds/dtau`` and ``d2s/dtau2`` of the minimum-jerk profile at ``tau``.
 
@@ -34,3 +36,32 @@ def min_jerk_segment(start: np.ndarray, end: np.ndarray, elapsed_s: float,
     s, ds, dds = min_jerk(elapsed_s / duration_s)
     delta = np.asarray(end) - np.asarray(start)
     return start + s * delta, (ds / duration_s) * delta, (dds / duration_s**2) * delta
+
+
+@numba.njit(cache=True)
+def min_jerk_reference(out: np.ndarray, start: np.ndarray, end: np.ndarray, elapsed_s: float,
+                       duration_s: float, lateral_delay: float,
+                       lateral_share: float) -> None:  # pragma: no cover - compiled
+    """Position, velocity and acceleration on a minimum-jerk move, into ``out``'s rows (3, n).
+
+    The vertical axes (from the third on) move over the whole ``duration_s`` [s]; the first
+    two (horizontal) start ``lateral_delay`` and last ``lateral_share`` of it (fractions):
+    ``0, 1`` moves every axis together; ``0.25, 0.75`` lifts a foot off vertically first;
+    ``0, 0.75`` sets it down vertically last. One compiled call, no allocation: for the
+    references a motion sets every control tick.
+    """
+    tau = elapsed_s / duration_s
+    s, ds, dds = min_jerk(tau)
+    rate, curvature = 1.0 / duration_s, 1.0 / (duration_s * duration_s)
+    lateral = 1.0 / (lateral_share * duration_s)
+    sl, dsl, ddsl = min_jerk((tau - lateral_delay) / lateral_share)
+    for k in range(out.shape[1]):
+        delta = end[k] - start[k]
+        if k < 2:
+            out[0, k] = start[k] + sl * delta
+            out[1, k] = dsl * lateral * delta
+            out[2, k] = ddsl * lateral * lateral * delta
+        else:
+            out[0, k] = start[k] + s * delta
+            out[1, k] = ds * rate * delta
+            out[2, k] = dds * curvature * delta

@@ -112,6 +112,8 @@ class WholeBodyController(ContactModes):
         frames += tuple(f for f in extra_frames if f not in frames)
         #: The robot's kinematics and dynamics at the last state (one compiled call a tick).
         self.kinematics = RobotKinematics(self.model, frames)
+        self._feet_view = self.kinematics.frame_position[:len(LEGS)]
+        self._feet_view.flags.writeable = False
 
         self.com_task = ComTask(kp=cfg.com_kp, weight=cfg.com_weight)
         self.base_task = BaseOrientationTask(kp=cfg.base_orientation_kp,
@@ -260,8 +262,7 @@ class WholeBodyController(ContactModes):
     def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
                        acceleration: np.ndarray | None = None) -> None:
         """Centre-of-mass target [m], velocity [m/s] and feed-forward acceleration [m/s^2]."""
-        self.com_task.set_target(position, velocity)
-        self.com_task.set_feedforward(np.zeros(3) if acceleration is None else acceleration)
+        self.com_task.set_motion(position, velocity, acceleration)
 
     @property
     def posture_target(self) -> np.ndarray:
@@ -272,8 +273,7 @@ class WholeBodyController(ContactModes):
                            velocity: np.ndarray | None = None,
                            acceleration: np.ndarray | None = None) -> None:
         """Joint posture target [rad], velocity [rad/s] and feed-forward [rad/s^2] (12,)."""
-        self.posture_task.set_target(joint_positions, velocity)
-        self.posture_task.set_feedforward(np.zeros(_NJ) if acceleration is None else acceleration)
+        self.posture_task.set_motion(joint_positions, velocity, acceleration)
 
     def set_posture_weights(self, weights: np.ndarray) -> None:
         """Per-joint multipliers (12,) of the posture weight; ones restore the default."""
@@ -302,6 +302,13 @@ class WholeBodyController(ContactModes):
         check_name("leg", leg, LEGS)
         return self.kinematics.frame_position[_LEG_INDEX[leg]].copy()
 
+    def foot_positions(self) -> np.ndarray:
+        """World positions (4, 3) [m] of the foot frames at the last state, ``LEGS`` order.
+
+        A read-only view that the next tick updates: copy it to keep it.
+        """
+        return self._feet_view
+
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,
@@ -317,8 +324,7 @@ class WholeBodyController(ContactModes):
                 shoulder at the last state; the target is left unchanged.
         """
         position = self._reachable_target(leg, position, clamp_to_reach)
-        self.foot_tasks[leg].set_target(position, velocity)
-        self.foot_tasks[leg].set_feedforward(np.zeros(3) if acceleration is None else acceleration)
+        self.foot_tasks[leg].set_motion(position, velocity, acceleration)
 
     def _contact_mode_changed(self, leg: str) -> None:
         i = _LEG_INDEX[leg]
