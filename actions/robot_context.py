@@ -9,7 +9,7 @@ import numpy as np
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput, ControlStatus
 from wbc.description import LEGS
-from wbc.support_polygon import SupportPolygon, shrunk_signed_distance
+from wbc.support_polygon import SupportPolygon, capture_point_margin
 
 #: Above this base tilt [deg] the robot is losing its balance.
 TILT_LIMIT_DEG = 12.0
@@ -34,7 +34,8 @@ class RobotContext:
         self.fault = ""
         #: Ticks in a row the controller could only send its damping fallback.
         self.consecutive_fallbacks = 0
-        self._feet = np.zeros((len(LEGS), 3))  # the support feet, filled every watch tick
+        #: Rows of ``foot_positions()`` that make each support polygon seen so far.
+        self._support_rows: dict[tuple[str, ...], np.ndarray] = {}
 
     def record_output(self, out: ControlOutput) -> None:
         """Record the command sent this tick; any tick that is not OK is a controller fault."""
@@ -76,17 +77,15 @@ class RobotContext:
         count = len(legs)
         if count < 3:
             return -math.inf
-        feet = self._feet
-        for i, leg in enumerate(legs):
-            feet[i] = controller.foot_position(leg)
-        # Python floats: a few scalar operations, each far cheaper than on NumPy scalars.
-        x, y, z = controller.com_position().tolist()
-        vx, vy, _ = controller.com_velocity().tolist()
-        omega0 = math.sqrt(_GRAVITY / max(z, 0.05))
+        key = tuple(legs)
+        support = self._support_rows.get(key)
+        if support is None:
+            support = self._support_rows[key] = np.array([LEGS.index(leg) for leg in legs])
         weight = controller.total_mass_kg * _GRAVITY
         shrink = max(0.0, 1.0 - count * controller.min_normal_force_n / weight)
-        return shrunk_signed_distance(feet, (x + vx / omega0, y + vy / omega0), shrink=shrink,
-                                      count=count)
+        return capture_point_margin(controller.foot_positions(), support,
+                                    controller.com_position(), controller.com_velocity(),
+                                    shrink, _GRAVITY)
 
     def is_upright(self) -> bool:
         """The base is level enough and high enough to stand."""

@@ -8,6 +8,7 @@ import pytest
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlStatus
+from wbc.description import LEGS
 from wbc.errors import ConfigurationError, ReachabilityError
 from wbc.placo_controller import PlacoController
 
@@ -27,6 +28,13 @@ def standing(controller, description):
 
 def test_follows_the_balance_controller_protocol(controller):
     assert isinstance(controller, BalanceController)
+
+
+def test_foot_positions_are_the_feet_in_leg_order(standing):
+    controller, _ = standing
+    feet = controller.foot_positions()
+    for i, leg in enumerate(LEGS):
+        np.testing.assert_array_equal(feet[i], controller.foot_position(leg))
 
 
 def test_stands_two_seconds_in_mujoco(standing, description):

@@ -36,6 +36,9 @@ class StubController:
     def foot_position(self, leg: str) -> np.ndarray:
         return self.feet[leg].copy()
 
+    def foot_positions(self) -> np.ndarray:
+        return np.array([self.feet[leg] for leg in LEGS])
+
 
 def reference_margin(c: StubController) -> float:
     """The watch's definition, in plain NumPy."""

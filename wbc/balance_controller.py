@@ -72,6 +72,9 @@ class BalanceController(Protocol):
     def foot_position(self, leg: str) -> np.ndarray:
         """Foot frame position at the last state."""
 
+    def foot_positions(self) -> np.ndarray:
+        """The four foot frames' positions (4, 3) at the last state, in ``LEGS`` order."""
+
     def shoulder_position(self, leg: str) -> np.ndarray:
         """Thigh joint position at the last state."""
 

@@ -226,6 +226,10 @@ class PlacoController(ContactModes):
         check_name("leg", leg, LEGS)
         return self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3].copy()
 
+    def foot_positions(self) -> np.ndarray:
+        """World positions (4, 3) [m] of the foot frames at the last state, ``LEGS`` order."""
+        return np.array([self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3] for leg in LEGS])
+
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,

@@ -94,6 +94,32 @@ def shrunk_signed_distance(points: np.ndarray, point: np.ndarray, *, shrink: flo
         return _shrunk_signed_distance(points, count, x, y, float(shrink))
 
 
+@numba.njit(cache=True)
+def capture_point_margin(feet, support, com, com_velocity, shrink, gravity):  # pragma: no cover
+    """Signed distance [m] of the capture point to the support polygon shrunk about its centroid.
+
+    The capture point ``c + c_dot / omega0`` (``omega0 = sqrt(g / z_com)``, with ``z_com``
+    at least 5 cm) is where the centre of mass would come to rest over. One compiled call,
+    for a balance watch that runs every control tick.
+
+    Args:
+        feet: Foot positions (n, 3) [m].
+        support: Indices (k,) of the rows of ``feet`` that make the polygon (3 to
+            :data:`MAX_CORNERS`).
+        com, com_velocity: Centre of mass [m] and its velocity [m/s] (3,).
+        shrink: Scale of the polygon about its centroid (see :func:`shrunk_signed_distance`).
+        gravity: [m/s^2].
+    """
+    count = support.size
+    corners = np.empty((count, 2))
+    for i in range(count):
+        corners[i, 0] = feet[support[i], 0]
+        corners[i, 1] = feet[support[i], 1]
+    omega0 = math.sqrt(gravity / max(com[2], 0.05))
+    return _shrunk_signed_distance(corners, count, com[0] + com_velocity[0] / omega0,
+                                   com[1] + com_velocity[1] / omega0, shrink)
+
+
 class SupportPolygon:
     """Convex polygon of foot positions in the ground plane, with an inner margin.
 
