@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import ctypes
+import importlib.metadata
+import logging
 import math
 import time
 
@@ -16,6 +19,8 @@ except ImportError as err:  # pragma: no cover - depends on the machine
     daqp = None
     register_missing("daqp", f"package 'daqp' not importable: {err}")
 
+logger = logging.getLogger(__name__)
+
 _EQUALITY = 5  # DAQP constraint sense of an equality row
 _ACTIVE = 1    # DAQP sense flag: start with this constraint in the active set
 _LOWER = 2     # DAQP sense flag: ... at its lower bound (negative multiplier)
@@ -23,6 +28,135 @@ _EXIT_FLAGS = {
     1: "optimal", 2: "soft optimal", -1: "infeasible", -2: "cycling", -3: "unbounded",
     -4: "iteration limit", -5: "nonconvex", -6: "overdetermined initial active set",
 }
+
+
+#: The DAQP releases whose C structures :class:`_DirectCall` lays out (DAQP's ``types.h``
+#: and ``api.h``); any other release is called through its Python wrapper.
+_DIRECT_RELEASES = ("0.11.",)
+_c_double_p = ctypes.POINTER(ctypes.c_double)
+_c_int_p = ctypes.POINTER(ctypes.c_int)
+# Room after each structure's known fields: a field a release adds cannot write past it.
+_SPARE = 256
+
+
+class _CProblem(ctypes.Structure):
+    _fields_ = [("n", ctypes.c_int), ("m", ctypes.c_int), ("ms", ctypes.c_int),
+                ("H", _c_double_p), ("f", _c_double_p), ("A", _c_double_p),
+                ("bupper", _c_double_p), ("blower", _c_double_p), ("sense", _c_int_p),
+                ("bin_ids", _c_int_p), ("nb", ctypes.c_int), ("spare", ctypes.c_char * _SPARE)]
+
+
+class _CResult(ctypes.Structure):
+    _fields_ = [("x", _c_double_p), ("lam", _c_double_p), ("fval", ctypes.c_double),
+                ("soft_slack", ctypes.c_double), ("exitflag", ctypes.c_int),
+                ("iter", ctypes.c_int), ("nodes", ctypes.c_int),
+                ("solve_time", ctypes.c_double), ("setup_time", ctypes.c_double),
+                ("spare", ctypes.c_char * _SPARE)]
+
+
+class _CSettings(ctypes.Structure):
+    _fields_ = [("primal_tol", ctypes.c_double), ("dual_tol", ctypes.c_double),
+                ("zero_tol", ctypes.c_double), ("pivot_tol", ctypes.c_double),
+                ("progress_tol", ctypes.c_double), ("cycle_tol", ctypes.c_int),
+                ("iter_limit", ctypes.c_int), ("spare", ctypes.c_char * _SPARE)]
+
+
+class _DirectCall:
+    """``daqp_quadprog`` called on one problem's arrays through ctypes, its structures built
+    once: about 2.5 us a solve here, where ``daqp.solve`` (which builds them, and the
+    output arrays and an info dict, on every call) takes about 6.
+
+    The problem's arrays are held, and checked by identity on every call: an array replaced
+    on the problem means a new call is built (:meth:`fits`).
+    """
+
+    _function = None
+
+    def __init__(self, problem: QpProblem, sense: np.ndarray, *, primal_tol: float,
+                 iter_limit: int):
+        self.arrays = (problem.H, problem.f, problem.A, problem.bupper, problem.blower, sense)
+        for array in self.arrays:
+            if not array.flags.c_contiguous:
+                raise ValueError("DAQP's arrays must be C-contiguous")
+        self.x = np.zeros(problem.n)
+        self.lam = np.zeros(problem.n + problem.m)
+        qp = self.problem = _CProblem()
+        qp.n, qp.m, qp.ms, qp.nb = problem.n, problem.n + problem.m, problem.n, 0
+        qp.H, qp.f, qp.A, qp.bupper, qp.blower = (
+            a.ctypes.data_as(_c_double_p) for a in self.arrays[:5])
+        qp.sense = sense.ctypes.data_as(_c_int_p)
+        self.result = _CResult()
+        self.result.x = self.x.ctypes.data_as(_c_double_p)
+        self.result.lam = self.lam.ctypes.data_as(_c_double_p)
+        self.settings = _CSettings()
+        function = self.function()
+        _library().daqp_default_settings(ctypes.byref(self.settings))
+        self.settings.primal_tol, self.settings.iter_limit = primal_tol, iter_limit
+        self._call = (function, ctypes.addressof(self.result), ctypes.addressof(qp),
+                      ctypes.addressof(self.settings))
+
+    @staticmethod
+    def function():
+        """``daqp_quadprog`` from the installed extension (``None`` if it cannot be used)."""
+        if _DirectCall._function is None:
+            lib = _library()
+            lib.daqp_default_settings.argtypes = [ctypes.c_void_p]
+            lib.daqp_default_settings.restype = None
+            call = lib.daqp_quadprog
+            call.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+            call.restype = None
+            _DirectCall._function = call
+        return _DirectCall._function
+
+    def fits(self, problem: QpProblem, sense: np.ndarray) -> bool:
+        """Whether this call still points at the problem's arrays."""
+        H, f, A, bupper, blower, held_sense = self.arrays
+        return (problem.H is H and problem.f is f and problem.A is A
+                and problem.bupper is bupper and problem.blower is blower
+                and sense is held_sense)
+
+    def __call__(self) -> tuple[int, int]:
+        """Solve into :attr:`x` and :attr:`lam`; DAQP's exit flag and iteration count."""
+        function, result, problem, settings = self._call
+        function(result, problem, settings)
+        return self.result.exitflag, self.result.iter
+
+
+def _library() -> ctypes.CDLL:
+    return ctypes.CDLL(daqp.__file__)
+
+
+def _direct_call_works() -> bool:
+    """Whether this DAQP release is one whose structures we lay out, and a direct call
+    gives the wrapper's solution on a small QP with equality, bounds and inequalities."""
+    if daqp is None:
+        return False
+    try:
+        release = importlib.metadata.version("daqp")
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover - odd installs
+        return False
+    if not release.startswith(_DIRECT_RELEASES):
+        logger.info("DAQP %s: called through its Python wrapper (direct calls are laid out "
+                    "for %s)", release, ", ".join(_DIRECT_RELEASES))
+        return False
+    try:
+        problem = QpProblem(3, 2)
+        problem.H[:] = [[4.0, 1.0, 0.0], [1.0, 3.0, 0.5], [0.0, 0.5, 2.0]]
+        problem.f[:] = [1.0, -2.0, 0.5]
+        problem.A[:] = [[1.0, 1.0, 1.0], [1.0, -1.0, 0.0]]
+        problem.lower[:], problem.upper[:] = [1.0, -np.inf], [1.0, 0.2]
+        problem.lb[:], problem.ub[:] = [-1.0, 0.0, -1.0], [1.0, 0.6, 1.0]
+        sense = np.zeros(5, dtype=np.int32)
+        sense[3] = _EQUALITY
+        call = _DirectCall(problem, sense, primal_tol=1e-9, iter_limit=100)
+        flag, _ = call()
+        x, _, expected_flag, _ = daqp.solve(problem.H, problem.f, problem.A, problem.bupper,
+                                            problem.blower, sense.copy(), primal_tol=1e-9,
+                                            iter_limit=100)
+        return flag == expected_flag == 1 and np.allclose(call.x, x, atol=1e-12, rtol=0.0)
+    except (AttributeError, OSError, ValueError) as err:  # pragma: no cover - odd installs
+        logger.info("DAQP: called through its Python wrapper (%s)", err)
+        return False
 
 
 class DaqpBackend(QpBackend):
@@ -33,56 +167,84 @@ class DaqpBackend(QpBackend):
     as they do every tick, and its wrapper made it slower than one ``daqp.solve`` call
     (about 60 us against 45 us). DAQP's setup dominates: it then converges in one or two
     active-set iterations from a cold start, so no warm start is passed.
+
+    On the pinned DAQP release the solve calls DAQP's C function directly, with its
+    structures built once per problem (:class:`_DirectCall`, checked against the wrapper
+    when first used); on any other release, through ``daqp.solve``.
     """
 
     name = "daqp"
+    #: Whether direct calls work on this installation (decided on first use).
+    _direct_ok: bool | None = None
 
     def __init__(self, *, primal_tol: float = 1e-9, iter_limit: int = 1000,
-                 hot_start: bool = False):
+                 hot_start: bool = False, direct: bool = True):
         """Args:
             primal_tol: Primal feasibility tolerance (constraint violation it accepts).
             iter_limit: Active-set iteration limit.
             hot_start: Start each solve from the previous solve's active set (DAQP's
                 "active" sense flag), while the problem's structure is unchanged.
+            direct: Call DAQP's C function directly where this DAQP release allows it
+                (``False``: always through ``daqp.solve``).
         """
         self.settings = {"primal_tol": primal_tol, "iter_limit": iter_limit}
         self.hot_start = hot_start
+        self.direct = direct
         self._sense = np.zeros(0, dtype=np.int32)
         self._base_sense = np.zeros(0, dtype=np.int32)
         self._problem: QpProblem | None = None
         self._version = -1
+        self._call: _DirectCall | None = None
 
     def setup(self, problem: QpProblem) -> None:
         self._sense = np.zeros(problem.n + problem.m, dtype=np.int32)
         self._sense[problem.n:][problem.is_equality] = _EQUALITY
         self._base_sense = self._sense.copy()
         self._problem, self._version = problem, problem.structure_version
+        self._call = None
+        if self.direct:
+            if DaqpBackend._direct_ok is None:
+                DaqpBackend._direct_ok = _direct_call_works()
+            if DaqpBackend._direct_ok:
+                self._call = _DirectCall(problem, self._sense, **self.settings)
+
+    @property
+    def uses_direct_call(self) -> bool:
+        """Whether the last solve called DAQP's C function directly (else ``daqp.solve``)."""
+        return self._call is not None
 
     def solve(self, problem: QpProblem) -> QpResult:
         if problem is not self._problem or problem.structure_version != self._version:
             self.setup(problem)
-        settings = self.settings
+        call = self._call
+        if call is not None and not call.fits(problem, self._sense):
+            self.setup(problem)  # an array was replaced on the problem
+            call = self._call
         start = time.perf_counter()
-        x, _, exitflag, info = daqp.solve(problem.H, problem.f, problem.A, problem.bupper,
-                                          problem.blower, self._sense,
-                                          primal_tol=settings["primal_tol"],
-                                          iter_limit=settings["iter_limit"])
+        if call is not None:
+            exitflag, iterations = call()
+            x, lam = call.x.copy(), call.lam
+        else:
+            settings = self.settings
+            x, _, exitflag, info = daqp.solve(problem.H, problem.f, problem.A, problem.bupper,
+                                              problem.blower, self._sense,
+                                              primal_tol=settings["primal_tol"],
+                                              iter_limit=settings["iter_limit"])
+            iterations, lam = int(info.get("iterations", 0)), info.get("lam")
         elapsed = time.perf_counter() - start
-        # A finite dot product means a finite solution (cheaper than a sum at this size).
-        found = (exitflag == 1 or exitflag == 2) and math.isfinite(x @ x)
+        # A finite sum means a finite solution (a NaN or an infinity would show in it); over
+        # Python floats it is cheaper than any NumPy reduction at this size.
+        found = (exitflag == 1 or exitflag == 2) and math.isfinite(sum(x.tolist()))
         if self.hot_start:  # the next solve starts from this active set (a solved one only)
             np.copyto(self._sense, self._base_sense)
             if found:
-                lam = info["lam"]
                 self._sense[lam != 0.0] |= _ACTIVE
                 self._sense[lam < 0.0] |= _LOWER
         if found:
-            return QpResult(found=True, x=x, solve_time_s=elapsed,
-                            iterations=info["iterations"])
+            return QpResult(found=True, x=x, solve_time_s=elapsed, iterations=iterations)
         status = _EXIT_FLAGS.get(exitflag, f"exit flag {exitflag}")
         return QpResult(found=False, x=np.asarray(x, dtype=float), solve_time_s=elapsed,
-                        status=status, reason=f"DAQP: {status}",
-                        iterations=int(info.get("iterations", 0)))
+                        status=status, reason=f"DAQP: {status}", iterations=iterations)
 
 
 if daqp is not None:
