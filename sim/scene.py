@@ -6,6 +6,7 @@ import re
 from collections.abc import Sequence
 
 import mujoco
+import numpy as np
 
 from sim.plant import DEFAULT_PLANT, Plant
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, Go2Description
@@ -23,6 +24,7 @@ def build_go2_spec(
     timestep_s: float = 1e-3,
     actuator_order: Sequence[str] | None = None,
     plant: Plant | str = DEFAULT_PLANT,
+    scenery: bool = True,
 ) -> mujoco.MjSpec:
     """A MuJoCo spec of the GO2 on a flat floor, ready to compile.
 
@@ -41,6 +43,9 @@ def build_go2_spec(
             by default); another order, e.g. the Unitree SDK's, is wired by name.
         plant: The physics the controller's model does not know (joint friction, contacts,
             payload): a :class:`sim.plant.Plant` or a preset's name.
+        scenery: Dress the scene for the viewer and videos (:func:`add_scenery`): a checker
+            floor, a sky, a shadow-casting light and coloured links. Visual only; ``False``
+            gives a plain grey scene with the same physics.
     """
     description = description or Go2Description()
     timestep_s = as_float("timestep_s", timestep_s, low=1e-5, high=0.01)
@@ -111,4 +116,75 @@ def build_go2_spec(
             forcerange=[-effort[name], effort[name]],
         )
     plant.apply(spec)
+    if scenery:
+        add_scenery(spec)
     return spec
+
+
+#: Link colours by body name prefix after the leg's (``FR_thigh`` -> ``thigh``): a light
+#: body over dark legs, each leg segment a shade apart, and black rubber feet. The overlays
+#: (:mod:`sim.scene_overlay`) keep the saturated colours for themselves.
+LINK_RGBA = {
+    "base": (0.86, 0.87, 0.89, 1.0),
+    "hip": (0.42, 0.44, 0.47, 1.0),
+    "thigh": (0.30, 0.32, 0.36, 1.0),
+    "calf": (0.18, 0.19, 0.21, 1.0),
+    "foot": (0.06, 0.06, 0.06, 1.0),
+}
+
+
+def add_scenery(spec: mujoco.MjSpec) -> None:
+    """Dress a GO2 spec for people to look at, in place, changing no physical quantity.
+
+    A checker floor (25 cm squares with thin lines), a sky that fades from blue to white at
+    the horizon, a spot light that follows the robot and casts its shadow, a softer head
+    light, and the links coloured by
+    segment (:data:`LINK_RGBA`). Only textures, materials, colours, lights and the visual
+    options change: no geom, body or joint is added or moved, so the compiled model's
+    dynamics and contacts are those of the plain scene (``tests/test_scene.py`` checks
+    every field).
+    """
+    # The URDF parser discards visual-only content by default, textures and materials too;
+    # keep them, and delete by hand what it would have discarded: the foot mesh, whose
+    # geoms the foot spheres replaced.
+    spec.compiler.discardvisual = False
+    used = {geom.meshname for geom in spec.geoms}
+    for mesh in list(spec.meshes):
+        if mesh.name not in used:
+            spec.delete(mesh)
+    spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+                     builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.42, 0.62, 0.85],
+                     rgb2=[0.95, 0.97, 1.0], width=256, height=1536)
+    spec.add_texture(name="checker", type=mujoco.mjtTexture.mjTEXTURE_2D,
+                     builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, rgb1=[0.36, 0.40, 0.45],
+                     rgb2=[0.46, 0.50, 0.55], mark=mujoco.mjtMark.mjMARK_EDGE,
+                     markrgb=[0.62, 0.66, 0.70], width=256, height=256)
+    floor_material = spec.add_material(name="floor", texrepeat=[2.0, 2.0], texuniform=True,
+                                       reflectance=0.0)
+    floor_material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "checker"
+    for geom in spec.geoms:
+        if geom.name == "floor":
+            geom.material = "floor"
+            geom.rgba = [1.0, 1.0, 1.0, 1.0]
+            continue
+        body = geom.parent.name
+        part = "base" if body == "base" else body.split("_", 1)[-1]
+        geom.rgba = list(LINK_RGBA.get(part, LINK_RGBA["base"]))
+    for light in list(spec.lights):
+        spec.delete(light)
+    # A spot light from the front left and high, following the robot's centre of mass: the
+    # shadow falls behind the robot and to its right, onto the floor the video's camera sees.
+    # (A slanted directional light's shadow map left acne on the floor around the robot.)
+    direction = np.array([-0.35, -0.25, -1.0])
+    direction /= np.linalg.norm(direction)
+    spec.worldbody.add_light(name="key", type=mujoco.mjtLightType.mjLIGHT_SPOT,
+                             pos=list(-3.0 * direction), dir=list(direction), cutoff=40.0,
+                             castshadow=True, mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM,
+                             diffuse=[0.75, 0.75, 0.72], specular=[0.2, 0.2, 0.2],
+                             ambient=[0.0, 0.0, 0.0])
+    visual = spec.visual
+    visual.headlight.ambient = [0.32, 0.32, 0.34]
+    visual.headlight.diffuse = [0.35, 0.35, 0.35]
+    visual.headlight.specular = [0.05, 0.05, 0.05]
+    visual.rgba.haze = [0.88, 0.92, 0.97, 1.0]
+    visual.quality.shadowsize = 2048
