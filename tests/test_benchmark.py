@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import platform
 
 import pytest
 
@@ -24,7 +25,8 @@ def quick_run(tmp_path_factory):
 def test_machine_block(quick_run):
     report, _ = quick_run
     machine = report["machine"]
-    assert machine["cpu"] and machine["cores"] >= 1 and machine["python"].startswith("3.11")
+    assert machine["cpu"] and machine["cores"] >= 1
+    assert machine["python"] == platform.python_version()
     for package in ("pin", "placo", "mujoco", "daqp", "osqp", "qpsolvers", "numpy"):
         assert machine["versions"][package], package
     assert report["mode"] == "quick"
