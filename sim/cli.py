@@ -29,6 +29,7 @@ from actions.messages import FollowJointTrajectoryGoal, HighFiveGoal, SitGoal, S
 from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.run_recorder import RAISED_LEG, MetricsHook, TickRecorder, write_plot
+from sim.scene_overlay import DEFAULT_OVERLAYS, SceneOverlay, parse_overlays
 from sim.trajectory_file import load_trajectory_goal
 from sim.video_recorder import VideoRecorder, choose_offscreen_gl
 from sim.viewer import Pacer, ViewerHook, window_problem
@@ -164,6 +165,13 @@ def _video_size(text: str) -> tuple[int, int]:
     if not all(16 <= n <= 3840 and n % 2 == 0 for n in (width, height)):
         raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}")
     return width, height
+
+
+def _overlays(text: str) -> tuple[str, ...]:
+    try:
+        return parse_overlays(text)
+    except ConfigurationError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def _output(*suffixes: str) -> Callable[[str], Path]:
@@ -331,6 +339,13 @@ def _run_options() -> argparse.ArgumentParser:
                      metavar="N", help="video frame rate [1/s] of simulated time (default: 30)")
     out.add_argument("--video-size", type=_video_size, default=None, metavar="WxH",
                      help="video frame size in pixels (default: 640x480)")
+    out.add_argument("--overlay", type=_overlays, default=None, metavar="LIST",
+                     help="what the viewer and the video draw over the robot, comma-separated: "
+                          "com (the centre of mass and its ground projection), polygon (the "
+                          "support polygon of the loaded feet, its margin inside), forces (the "
+                          "commanded contact forces), measured (MuJoCo's contact forces), "
+                          "target (the raised foot's target and its trace); or all, or none "
+                          f"(default: {','.join(DEFAULT_OVERLAYS)})")
     out.add_argument("--plot", type=_output(".png", ".pdf", ".svg"), metavar="FILE.png",
                      help="plot raised-foot height vs target, CoM margin to the support edge, "
                           "FR normal force and control tick time against sim time "
@@ -419,6 +434,9 @@ def _check_combinations(args: argparse.Namespace) -> None:
                           ("push_at", "push"), ("push_dir", "push")):
         if getattr(args, option) is not None and getattr(args, needs) is None:
             args.parser.error(f"--{option.replace('_', '-')}: only used with --{needs}")
+    if args.overlay is not None and args.video is None and not args.viewer:
+        args.parser.error("--overlay: only used with --video or --viewer")
+    args.overlay = DEFAULT_OVERLAYS if args.overlay is None else args.overlay
     args.fps = args.fps or 30
     args.video_size = args.video_size or (640, 480)
     args.push_at = 3.5 if args.push_at is None else args.push_at
@@ -585,6 +603,7 @@ class GoalRun:
         self.stream = stream or sys.stdout
         self.printer = FeedbackPrinter(self.stream, tty=self.stream.isatty())
         self.phase = ""
+        self.progress = 0.0
         self.max_error = 0.0
         self.feedback: list[dict[str, Any]] = []
         self.events: list[_Event] = []
@@ -649,9 +668,12 @@ class GoalRun:
         if args.log or args.plot:
             self.recorder = TickRecorder(lambda: self.phase, self.leg)
             loop.hooks.append(_Timed(self.recorder, self.overhead_s))
+        overlay = (SceneOverlay(args.overlay, status_of=lambda: (self.phase, self.progress))
+                   if args.overlay else None)
         if args.video is not None:
             try:
-                video = VideoRecorder(loop.sim, args.video, fps=args.fps, size=args.video_size)
+                video = VideoRecorder(loop.sim, args.video, fps=args.fps, size=args.video_size,
+                                      overlay=overlay)
             except Exception as err:  # noqa: BLE001 - GL backends fail in assorted types
                 print(f"go2-wbc: --video: offscreen rendering is unavailable "
                       f"(MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}): "
@@ -663,7 +685,7 @@ class GoalRun:
             self.video = video
         if viewer:
             try:
-                view = ViewerHook(loop.sim)
+                view = ViewerHook(loop.sim, overlay=overlay)
             except Exception as err:  # noqa: BLE001 - GLFW and X fail in assorted types
                 print(f"go2-wbc: --viewer: cannot open a window ({' '.join(str(err).split())}); "
                       "running headless", file=sys.stderr)
@@ -679,7 +701,7 @@ class GoalRun:
     def _on_feedback(self, message: Any) -> None:
         now_s = self.loop.context.now_s
         phase, progress, error = _feedback_view(message.feedback, self.trajectory_end_s)
-        self.phase = phase
+        self.phase, self.progress = phase, progress
         entry = {"t_s": round(now_s, 4), "phase": phase, "progress": round(progress, 4)}
         detail = ""
         if error is not None:

@@ -138,11 +138,10 @@ def add_scenery(spec: mujoco.MjSpec) -> None:
 
     A checker floor (25 cm squares with thin lines), a sky that fades from blue to white at
     the horizon, a spot light that follows the robot and casts its shadow, a softer head
-    light, and the links coloured by
-    segment (:data:`LINK_RGBA`). Only textures, materials, colours, lights and the visual
-    options change: no geom, body or joint is added or moved, so the compiled model's
-    dynamics and contacts are those of the plain scene (``tests/test_scene.py`` checks
-    every field).
+    light, and the links coloured by segment (:data:`LINK_RGBA`). Only textures, materials,
+    colours, lights and the visual options change: no geom, body or joint is added or
+    moved, so the compiled model's dynamics and contacts are those of the plain scene
+    (``tests/test_scene.py`` checks every field).
     """
     # The URDF parser discards visual-only content by default, textures and materials too;
     # keep them, and delete by hand what it would have discarded: the foot mesh, whose

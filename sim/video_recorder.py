@@ -7,22 +7,31 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from sim.viewer import has_display
+import numpy as np
+
+from sim.viewer import follow_base, has_display
 
 if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
+    from sim.scene_overlay import SceneOverlay
     from sim.simulator import Go2Simulator
     from wbc.control_output import ControlOutput
 
 
 class VideoRecorder:
-    """Renders a camera tracking the base at ``fps`` frames per simulated second to an MP4."""
+    """Renders a camera tracking the base at ``fps`` frames per simulated second to an MP4.
 
-    def __init__(self, sim: Go2Simulator, path: Path, *, fps: int, size: tuple[int, int]):
+    With an ``overlay`` (:class:`sim.scene_overlay.SceneOverlay`), each frame also shows
+    its geoms and, at the top left, its caption (the goal's phase and progress, the time).
+    """
+
+    def __init__(self, sim: Go2Simulator, path: Path, *, fps: int, size: tuple[int, int],
+                 overlay: SceneOverlay | None = None):
         import imageio
         import mujoco
 
         width, height = size
+        self.aspect = width / height
         vis = sim.model.vis
         saved = (vis.global_.offwidth, vis.global_.offheight, vis.quality.offsamples,
                  vis.quality.shadowsize)
@@ -39,11 +48,9 @@ class VideoRecorder:
             (vis.global_.offwidth, vis.global_.offheight, vis.quality.offsamples,
              vis.quality.shadowsize) = saved
         self.camera = mujoco.MjvCamera()
-        self.camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        self.camera.trackbodyid = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "base")
-        # From behind on the right, looking down enough to keep the (black) sky out of view.
-        self.camera.distance, self.camera.azimuth, self.camera.elevation = 1.5, 60.0, -25.0
+        follow_base(self.camera, sim.model)
         self.sim = sim
+        self.overlay = overlay
         self.period_s = 1.0 / fps
         self.next_s = sim.time_s
         self.frames = 0
@@ -54,9 +61,16 @@ class VideoRecorder:
         if self.sim.time_s + 1e-9 < self.next_s:
             return
         self.next_s += self.period_s
-        self.renderer.update_scene(self.sim.data, self.camera)
-        self.writer.append_data(self.renderer.render())
+        self.writer.append_data(self.render(loop))
         self.frames += 1
+
+    def render(self, loop: ControlLoop) -> np.ndarray:
+        """The current frame (height, width, 3), with the overlay if there is one."""
+        self.renderer.update_scene(self.sim.data, self.camera)
+        if self.overlay is not None:
+            self.overlay.draw(self.renderer.scene, loop)
+            self.overlay.draw_caption(self.renderer.scene, loop, aspect=self.aspect)
+        return self.renderer.render()
 
     def close(self) -> None:
         """Finish the file and free the GL context."""

@@ -7,9 +7,16 @@ import time
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    import mujoco
+
     from sim.control_loop import ControlLoop
+    from sim.scene_overlay import SceneOverlay
     from sim.simulator import Go2Simulator
     from wbc.control_output import ControlOutput
+
+#: The view the viewer opens with and videos are shot from: the base tracked from its front
+#: right, low enough to see the sky, high enough to see the support polygon between the feet.
+CAMERA_DISTANCE_M, CAMERA_AZIMUTH_DEG, CAMERA_ELEVATION_DEG = 1.6, 120.0, -25.0
 
 
 def has_display() -> bool:
@@ -34,21 +41,56 @@ def window_problem() -> str:
     return ""
 
 
-class ViewerHook:
-    """Keeps a passive MuJoCo viewer in sync, about 60 times a simulated second."""
+def follow_base(camera: mujoco.MjvCamera, model: mujoco.MjModel) -> None:
+    """Point ``camera`` at the GO2's base and track it, from the default view."""
+    import mujoco
 
-    def __init__(self, sim: Go2Simulator):
+    camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+    camera.trackbodyid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "base")
+    camera.distance = CAMERA_DISTANCE_M
+    camera.azimuth, camera.elevation = CAMERA_AZIMUTH_DEG, CAMERA_ELEVATION_DEG
+
+
+class ViewerHook:
+    """Keeps a passive MuJoCo viewer in sync, about 60 times a simulated second.
+
+    The window opens on the base, tracked (:func:`follow_base`). With an ``overlay`` it
+    draws the overlay's geoms into the viewer's user scene and its text panel (the goal's
+    phase and progress, the support feet, the CoM margin, the normal forces) at the top
+    left, at every sync.
+    """
+
+    def __init__(self, sim: Go2Simulator, *, overlay: SceneOverlay | None = None):
         import mujoco.viewer
 
         self.handle = mujoco.viewer.launch_passive(sim.model, sim.data, show_left_ui=False,
                                                    show_right_ui=False)
+        with self.handle.lock():
+            follow_base(self.handle.cam, sim.model)
         self.sim = sim
+        self.overlay = overlay
         self.next_s = 0.0
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         if self.sim.time_s >= self.next_s and self.handle.is_running():
+            if self.overlay is not None:
+                self.draw_overlay(loop)
             self.handle.sync()
             self.next_s = self.sim.time_s + 1.0 / 60.0
+
+    def draw_overlay(self, loop: ControlLoop) -> None:
+        """Replace the user scene's geoms and the text panel with the overlay's, now."""
+        import mujoco
+
+        overlay = self.overlay
+        if overlay is None:
+            return
+        with self.handle.lock():  # the window's thread renders the user scene
+            scene = self.handle.user_scn
+            scene.ngeom = 0
+            overlay.draw(scene, loop)
+        names, values = overlay.status_lines(loop)
+        self.handle.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, names, values))
 
     def close(self) -> None:
         """Close the window."""

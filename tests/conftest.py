@@ -2,6 +2,29 @@
 
 from __future__ import annotations
 
+import os
+
+from sim.video_recorder import choose_offscreen_gl
+
+
+def _offscreen_gl_in_this_process() -> None:
+    """Choose MuJoCo's offscreen GL backend for this process only, before anything imports
+    MuJoCo (which reads MUJOCO_GL once, at import): tests render frames here on machines
+    without a display, while the command line run in subprocesses must still choose its own.
+    """
+    saved = {k: os.environ.get(k) for k in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    choose_offscreen_gl()
+    import mujoco  # noqa: F401 - the import is what reads MUJOCO_GL
+
+    for key, value in saved.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
+
+
+_offscreen_gl_in_this_process()
+
 import numpy as np
 import pinocchio as pin
 import pytest

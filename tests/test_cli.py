@@ -314,6 +314,10 @@ def test_trajectory_from_a_file_succeeds(tmp_path):
     (["high-five", "--video", "v.mp4", "--video-size", "640x"],
      ("--video-size: expected WIDTHxHEIGHT in pixels, both even and in [16, 3840] "
       "(e.g. 640x480), received '640x'")),
+    (["high-five", "--video", "v.mp4", "--overlay", "com,bogus"],
+     ("--overlay: expected a comma-separated list of com, polygon, forces, measured, target, "
+      "or all or none; received 'com,bogus'")),
+    (["high-five", "--overlay", "com"], "--overlay: only used with --video or --viewer"),
     (["high-five", "--report", "/no/such/dir/r.json"],
      "--report: directory '/no/such/dir' does not exist (for '/no/such/dir/r.json')"),
     (["trajectory", "/no/such/file.yaml"],
@@ -390,6 +394,9 @@ def test_installed_command_records_a_video_of_the_right_size(tmp_path):
     assert all(f.shape == (120, 160, 3) for f in frames)
     # The robot lies down: the last frame differs from the first.
     assert np.abs(frames[-1].astype(float) - frames[0].astype(float)).mean() > 1.0
+    # The overlays are on by default: the support polygon's green is on the floor.
+    red, green, blue = (frames[0][..., k].astype(int) for k in range(3))
+    assert ((green > red + 60) & (green > blue + 60)).sum() > 20
     assert f"wrote {video} ({len(frames)} frames at 10 fps)" in done.stdout
 
 

@@ -1,0 +1,410 @@
+"""What the controller is doing, drawn into a MuJoCo scene: CoM, support polygon, forces, foot target."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from wbc.description import FOOT_RADIUS_M, LEGS
+from wbc.errors import ConfigurationError
+from wbc.support_polygon import SupportPolygon
+from wbc.validation import as_float
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from sim.control_loop import ControlLoop
+
+# MuJoCo is imported where it is used, not at the top: the command line parses --overlay
+# before it chooses MuJoCo's rendering backend (MUJOCO_GL), which must precede the import.
+
+#: Every overlay, in drawing order.
+OVERLAY_NAMES: tuple[str, ...] = ("com", "polygon", "forces", "measured", "target")
+#: What the viewer and the video show unless told otherwise.
+DEFAULT_OVERLAYS: tuple[str, ...] = ("com", "polygon", "forces", "target")
+#: Overlay colours (RGBA): saturated hues the scene's greys and blues do not use.
+COM_RGBA = (0.95, 0.10, 0.08, 1.0)
+POLYGON_RGBA = (0.10, 0.85, 0.25, 1.0)
+POLYGON_FILL_RGBA = (0.10, 0.85, 0.25, 0.35)
+MARGIN_RGBA = (0.90, 0.95, 0.15, 1.0)
+FORCE_RGBA = (1.00, 0.50, 0.00, 1.0)
+MEASURED_RGBA = (0.10, 0.35, 1.00, 1.0)
+TARGET_RGBA = (0.95, 0.10, 0.85, 0.5)
+TRACE_RGBA = (0.95, 0.10, 0.85, 1.0)
+
+#: Arrow length per newton [m/N]: a GO2 standing on four feet (about 38 N each) gets 15 cm
+#: arrows, on three about 20 cm.
+FORCE_SCALE_M_PER_N = 0.004
+#: Height [m] of the floor drawings above the floor, enough to win the depth test.
+_FLOOR_Z = 0.003
+#: Trace points closer than this [m] to the last one are skipped.
+_TRACE_STEP_M = 0.005
+#: Most points a trace keeps (the oldest are dropped).
+_TRACE_POINTS = 400
+#: The share of an arrow geom's ``size[2]`` MuJoCo 4.0's renderer draws: the shaft and head
+#: span half of it (``tests/test_scene_overlay.py`` checks the drawn length in pixels).
+ARROW_DRAWN_FRACTION = 0.5
+_IDENTITY = np.eye(3).reshape(9)
+_ZERO3 = np.zeros(3)
+
+
+def parse_overlays(text: str) -> tuple[str, ...]:
+    """Overlay names from a comma-separated list, ``all`` or ``none`` (the CLI's syntax).
+
+    Returns:
+        The names in :data:`OVERLAY_NAMES` order, without repeats.
+
+    Raises:
+        ConfigurationError: An empty list or an unknown name; the message lists the valid
+            names.
+    """
+    valid = ", ".join(OVERLAY_NAMES)
+    words = [w.strip().lower() for w in text.split(",")]
+    if words == ["all"]:
+        return OVERLAY_NAMES
+    if words == ["none"]:
+        return ()
+    unknown = [w for w in words if w not in OVERLAY_NAMES]
+    if unknown or not text.strip():
+        raise ConfigurationError(
+            f"expected a comma-separated list of {valid}, or all or none; received {text!r}")
+    return tuple(name for name in OVERLAY_NAMES if name in words)
+
+
+class SceneOverlay:
+    """Draws the controller's view of the robot as extra geoms in a :class:`mujoco.MjvScene`.
+
+    The overlays (:data:`OVERLAY_NAMES`):
+
+    - ``com``: a red ball at the centre of mass (inside the body: the viewer shows it when
+      the model is made transparent, key T), a red line down to the floor and a red disc
+      where it meets it;
+    - ``polygon``: the support polygon of the loaded feet in green, filled, and inside it,
+      in yellow, the polygon shrunk by the controller's support margin: the region the
+      controller keeps the CoM in;
+    - ``forces``: an orange arrow from each stance foot's contact point, the contact force
+      the controller commands, :data:`FORCE_SCALE_M_PER_N` long per newton;
+    - ``measured``: a thinner blue arrow beside it, the force MuJoCo measures;
+    - ``target``: a translucent magenta ball at each raised foot's target, and the target's
+      trace since the foot left the ground.
+
+    Everything comes from the loop's public state: the centre of mass, the support legs and
+    the feet from ``loop.controller``, the margin from its ``config.support_margin_m``, the
+    commanded forces from ``loop.last_output.forces``, the measured ones from ``loop.sim``,
+    a swing foot's target from the controller's foot task. The geoms are decor: they take no
+    part in the physics and cast no shadow.
+
+    Use it with the viewer (``handle.user_scn``) or an offscreen renderer (``renderer.scene``
+    after ``update_scene``); :class:`sim.viewer.ViewerHook` and
+    :class:`sim.video_recorder.VideoRecorder` take one.
+
+    Example:
+        >>> overlay = SceneOverlay(("com", "polygon"))
+        >>> renderer.update_scene(loop.sim.data, camera)
+        >>> overlay.draw(renderer.scene, loop)
+        >>> image = renderer.render()
+    """
+
+    def __init__(self, overlays: Iterable[str] = DEFAULT_OVERLAYS, *,
+                 force_scale_m_per_n: float = FORCE_SCALE_M_PER_N,
+                 status_of: Callable[[], tuple[str, float]] | None = None):
+        """Args:
+            overlays: Names from :data:`OVERLAY_NAMES`; an empty list draws nothing.
+            force_scale_m_per_n: Arrow length per newton of contact force [m/N].
+            status_of: Returns the running goal's ``(phase, progress 0..1)`` for the text
+                panel (:meth:`status_lines`); the panel leaves them out without it.
+
+        Raises:
+            ConfigurationError: An unknown overlay name (the message lists the valid ones),
+                or a scale that is not positive.
+        """
+        names = tuple(overlays)
+        for name in names:
+            if name not in OVERLAY_NAMES:
+                raise ConfigurationError(
+                    f"overlays: unknown overlay {name!r}; valid overlays: "
+                    f"{', '.join(OVERLAY_NAMES)}")
+        self.overlays = frozenset(names)
+        self.force_scale_m_per_n = as_float("force_scale_m_per_n", force_scale_m_per_n,
+                                            low=1e-6)
+        self.status_of = status_of
+        #: Past targets of each swinging foot since it left the ground [m].
+        self.traces: dict[str, list[np.ndarray]] = {leg: [] for leg in LEGS}
+        self._swinging: set[str] = set()
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.overlays
+
+    # ------------------------------------------------------------------ drawing
+
+    def draw(self, scene: mujoco.MjvScene, loop: ControlLoop) -> int:
+        """Append this tick's overlay geoms to ``scene``; returns how many were added.
+
+        Call it after the scene is filled from the model (``update_scene``, or on the
+        viewer's empty ``user_scn`` after setting its ``ngeom`` to 0). Geoms beyond the
+        scene's ``maxgeom`` are left out. Each call also extends the raised foot's trace
+        (a point every 5 mm of its target's travel), so call it at a frame rate.
+        """
+        start = scene.ngeom
+        controller = loop.controller
+        if "polygon" in self.overlays:
+            self._draw_polygon(scene, loop)
+        if "com" in self.overlays:
+            self._draw_com(scene, controller.com_position())
+        if "forces" in self.overlays and loop.last_output is not None:
+            self._draw_forces(scene, loop, loop.last_output.forces, FORCE_RGBA, width=0.015,
+                              offset_m=0.0)
+        if "measured" in self.overlays and hasattr(loop, "sim"):
+            measured = loop.sim.foot_contact_force_array()
+            self._draw_forces(scene, loop, measured, MEASURED_RGBA, width=0.007,
+                              offset_m=0.035)
+        if "target" in self.overlays:
+            swing = [leg for leg in LEGS if leg not in controller.stance_legs]
+            self._record_traces(controller, swing)
+            for leg in swing:
+                self._draw_target(scene, leg, foot_target(controller, leg))
+        return scene.ngeom - start
+
+    def _draw_com(self, scene: mujoco.MjvScene, com: np.ndarray) -> None:
+        import mujoco
+
+        ground = np.array([com[0], com[1], _FLOOR_Z])
+        _add(scene, mujoco.mjtGeom.mjGEOM_SPHERE, COM_RGBA, size=(0.025, 0, 0), pos=com)
+        _add(scene, mujoco.mjtGeom.mjGEOM_CYLINDER, COM_RGBA, size=(0.022, 0.001, 0),
+             pos=ground)
+        _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, COM_RGBA, 0.003, com, ground)
+
+    def _draw_polygon(self, scene: mujoco.MjvScene, loop: ControlLoop) -> None:
+        import mujoco
+
+        controller = loop.controller
+        legs = controller.support_legs()
+        if len(legs) < 3:  # no polygon (the controller then has no support constraint)
+            return
+        corners = SupportPolygon.ordered(np.array([controller.foot_position(leg)
+                                                   for leg in legs]))
+        ring = _on_floor(corners)
+        centre = ring.mean(axis=0)
+        for a, b in zip(ring, np.roll(ring, -1, axis=0)):
+            _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, POLYGON_RGBA, 0.006, a, b)
+            _triangle(scene, POLYGON_FILL_RGBA, centre, a, b)
+        margin = float(getattr(getattr(controller, "config", None), "support_margin_m", 0.0))
+        inner = inset_polygon(corners, margin)
+        if inner is not None:
+            inner_ring = _on_floor(inner, z=_FLOOR_Z + 0.001)
+            for a, b in zip(inner_ring, np.roll(inner_ring, -1, axis=0)):
+                _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, MARGIN_RGBA, 0.003, a, b)
+
+    def _draw_forces(self, scene: mujoco.MjvScene, loop: ControlLoop, forces: np.ndarray,
+                     rgba: Sequence[float], *, width: float, offset_m: float) -> None:
+        import mujoco
+
+        controller = loop.controller
+        com = controller.com_position()
+        for i, leg in enumerate(LEGS):
+            force = forces[i]
+            if not np.isfinite(force).all() or force @ force < 1.0:
+                continue
+            start = controller.foot_position(leg)
+            start[2] -= FOOT_RADIUS_M  # the contact point, where the force acts
+            if offset_m:  # beside the commanded arrow, away from the body
+                out = start[:2] - com[:2]
+                start[:2] += offset_m * out / max(float(np.hypot(*out)), 1e-9)
+            _connect(scene, mujoco.mjtGeom.mjGEOM_ARROW, rgba, width, start,
+                     start + self.force_scale_m_per_n / ARROW_DRAWN_FRACTION * force)
+
+    def _draw_target(self, scene: mujoco.MjvScene, leg: str, target: np.ndarray | None) -> None:
+        import mujoco
+
+        if target is None:
+            return
+        # Larger than the foot, which covers it while tracking well: a halo around the foot.
+        _add(scene, mujoco.mjtGeom.mjGEOM_SPHERE, TARGET_RGBA,
+             size=(1.5 * FOOT_RADIUS_M, 0, 0), pos=target)
+        trace = self.traces[leg]
+        for a, b in itertools.pairwise(trace):
+            _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, TRACE_RGBA, 0.003, a, b)
+
+    def _record_traces(self, controller: object, swing: list[str]) -> None:
+        for leg in swing:
+            trace = self.traces[leg]
+            if leg not in self._swinging:  # a new lift: a new trace
+                trace.clear()
+            target = foot_target(controller, leg)
+            if target is not None and (not trace or np.linalg.norm(target - trace[-1])
+                                       >= _TRACE_STEP_M):
+                trace.append(target)
+                del trace[:-_TRACE_POINTS]
+        self._swinging = set(swing)
+
+    # ------------------------------------------------------------------ text
+
+    def caption(self, loop: ControlLoop) -> str:
+        """One line for a video frame: the goal's phase and progress, and the time."""
+        text = f"t {loop.context.now_s:5.2f} s"
+        if self.status_of is not None:
+            phase, progress = self.status_of()
+            text = f"{phase or '-'}  {100.0 * progress:3.0f} %   " + text
+        return text
+
+    def draw_caption(self, scene: mujoco.MjvScene, loop: ControlLoop, *, aspect: float) -> None:
+        """:meth:`caption` as a label at the top left of the view of ``scene``'s camera.
+
+        Call it after ``update_scene``, which sets the camera. A label is text MuJoCo draws
+        above and to the right of a 3D point, so the point is put 60 cm in front of the
+        camera (MuJoCo leaves out labels nearer than about 40 cm; the robot the camera
+        tracks is farther), near the view's top left corner.
+
+        Args:
+            scene: The scene to add the label to.
+            loop: The control loop whose state the caption tells.
+            aspect: The image's width over its height (MuJoCo's perspective camera leaves
+                its frustum's width to the viewport).
+        """
+        import mujoco
+
+        geom = _slot(scene)
+        if geom is None:
+            return
+        camera = scene.camera[0]
+        forward, up = np.array(camera.forward), np.array(camera.up)
+        right = np.cross(forward, up)
+        # One camera per eye, either side of the head; a mono view is from their average.
+        head = (np.array(scene.camera[0].pos) + np.array(scene.camera[1].pos)) / 2
+        near = camera.frustum_near
+        half_height = 0.5 * (camera.frustum_top - camera.frustum_bottom)
+        half_width = camera.frustum_width or half_height * aspect
+        # Nearer the left edge MuJoCo drops the label altogether (about 0.9 of the half width).
+        x = camera.frustum_center - 0.8 * half_width
+        y = camera.frustum_top - 0.25 * half_height
+        depth = 0.6
+        pos = head + depth * forward + depth / near * (x * right + y * up)
+        _init(geom, mujoco.mjtGeom.mjGEOM_LABEL, (1.0, 1.0, 1.0, 1.0), _ZERO3, pos)
+        geom.label = self.caption(loop)
+
+    def status_lines(self, loop: ControlLoop) -> tuple[str, str]:
+        """The text panel: names and values, one per line (the viewer's two columns)."""
+        rows: list[tuple[str, str]] = []
+        if self.status_of is not None:
+            phase, progress = self.status_of()
+            rows += [("phase", phase or "-"), ("progress", f"{100.0 * progress:.0f} %")]
+        rows.append(("time", f"{loop.context.now_s:.2f} s"))
+        controller = loop.controller
+        rows.append(("support", " ".join(controller.support_legs()) or "-"))
+        margin = loop.context.com_margin_m()
+        if math.isfinite(margin):
+            rows.append(("CoM margin", f"{margin * 1e3:.0f} mm"))
+        out = loop.last_output
+        if out is not None and np.isfinite(out.forces).all():
+            rows.append(("normal force", "  ".join(
+                f"{leg} {out.forces[i, 2]:.0f}" for i, leg in enumerate(LEGS)) + " N"))
+        return "\n".join(r[0] for r in rows), "\n".join(r[1] for r in rows)
+
+
+# ---------------------------------------------------------------------- geometry
+
+
+def foot_target(controller: object, leg: str) -> np.ndarray | None:
+    """A foot's position target [m] from the controller's foot task (``None`` if unset).
+
+    :class:`wbc.WholeBodyController`'s tasks hold it in ``target``, PlaCo's in
+    ``target_world``.
+    """
+    tasks = getattr(controller, "foot_tasks", None)
+    if not tasks or leg not in tasks:
+        return None
+    task = tasks[leg]
+    target = getattr(task, "target", None)
+    if target is None:
+        target = getattr(task, "target_world", None)
+    return None if target is None else np.array(target, dtype=float).reshape(3)
+
+
+def inset_polygon(corners: np.ndarray, margin_m: float) -> np.ndarray | None:
+    """The polygon of ``corners`` (k, 2+) with every edge moved ``margin_m`` [m] inwards.
+
+    The region the controller keeps the CoM in (:class:`wbc.support_polygon.SupportPolygon`
+    with that margin). Returns its corners (k, 2) counter-clockwise, or ``None`` when the
+    margin leaves nothing.
+    """
+    normals, offsets = SupportPolygon(margin_m=margin_m).halfplanes(corners)
+    k = len(normals)
+    inner = np.empty((k, 2))
+    for i in range(k):
+        j = (i + 1) % k  # edges i and j meet at corner j of the ordered polygon
+        matrix = np.vstack([normals[i], normals[j]])
+        if abs(np.linalg.det(matrix)) < 1e-12:
+            return None
+        inner[j] = np.linalg.solve(matrix, [offsets[i], offsets[j]])
+    if np.any(normals @ inner.T - offsets[:, None] < -1e-9):
+        return None
+    return inner
+
+
+def _on_floor(points: np.ndarray, z: float = _FLOOR_Z) -> np.ndarray:
+    ring = np.empty((len(points), 3))
+    ring[:, :2] = points[:, :2]
+    ring[:, 2] = z
+    return ring
+
+
+def _slot(scene: mujoco.MjvScene) -> mujoco.MjvGeom | None:
+    if scene.ngeom >= scene.maxgeom:
+        return None
+    geom = scene.geoms[scene.ngeom]
+    scene.ngeom += 1
+    return geom
+
+
+def _init(geom: mujoco.MjvGeom, kind: int, rgba: Sequence[float], size: Sequence[float],
+          pos: np.ndarray, mat: np.ndarray = _IDENTITY) -> None:
+    import mujoco
+
+    mujoco.mjv_initGeom(geom, kind, np.asarray(size, dtype=float), np.asarray(pos, dtype=float),
+                        mat, np.asarray(rgba, dtype=np.float32))
+    geom.category = mujoco.mjtCatBit.mjCAT_DECOR
+    geom.castshadow = False
+    geom.emission = 0.35  # keeps the hue under the lights, for people and for tests
+
+
+def _add(scene: mujoco.MjvScene, kind: int, rgba: Sequence[float], *, size: Sequence[float],
+         pos: np.ndarray) -> None:
+    geom = _slot(scene)
+    if geom is not None:
+        _init(geom, kind, rgba, size, pos)
+
+
+def _connect(scene: mujoco.MjvScene, kind: int, rgba: Sequence[float], width: float,
+             start: np.ndarray, end: np.ndarray) -> None:
+    import mujoco
+
+    geom = _slot(scene)
+    if geom is not None:
+        _init(geom, kind, rgba, _ZERO3, _ZERO3)
+        mujoco.mjv_connector(geom, kind, width, np.asarray(start, dtype=float),
+                             np.asarray(end, dtype=float))
+
+
+def _triangle(scene: mujoco.MjvScene, rgba: Sequence[float], a: np.ndarray, b: np.ndarray,
+              c: np.ndarray) -> None:
+    """A filled triangle: MuJoCo's triangle spans (0, 0, 0), (size0, 0, 0), (0, size1, 0) of
+    its frame, so a frame whose axes are the two edges (and the normal) maps it onto a b c."""
+    import mujoco
+
+    geom = _slot(scene)
+    if geom is None:
+        return
+    u, v = b - a, c - a
+    normal = np.cross(u, v)
+    length = float(np.linalg.norm(normal))
+    if length < 1e-12:
+        scene.ngeom -= 1
+        return
+    if normal[2] < 0:  # face up, towards the light
+        u, v, normal = v, u, -normal
+    mat = np.column_stack([u, v, normal / length]).reshape(9)
+    _init(geom, mujoco.mjtGeom.mjGEOM_TRIANGLE, rgba, (1.0, 1.0, 1.0), a, mat)
