@@ -17,9 +17,10 @@ default :class:`wbc.WholeBodyController`, a HighFive goal of 0.40 m), on the def
 4. The calf sweep, 2 s hold, on the ``identified`` joints: calf friction loss
    {0.2, 0.5, 1.0, 1.4} N m x joint damping {0.1, 0.3, 2} x payload {none, 2 kg}.
 
-The sweeps' episodes run in parallel processes (``--jobs``). Every run is seeded and in
-simulated time: the same settings give the same tables. ``--quick`` runs a 2 x 2 corner of
-the push grid, two plant changes and the hardest corner of each sweep.
+Every table's episodes run in parallel processes (``--jobs``); ``python -m benchmarks.sweep``
+runs larger grids of pushes, plant parameters and gains (on Ray when installed). Every run
+is seeded and in simulated time: the same settings give the same tables. ``--quick`` runs a
+2 x 2 corner of the push grid, two plant changes and the hardest corner of each sweep.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ import json
 import math
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -280,6 +281,28 @@ def hold_push(direction_deg: float, impulse_ns: float, *, body: str = "base",
                 duration_s=duration_s, direction_deg=direction_deg, body=body)
 
 
+def run_episode(case: PlantCase = PlantCase(), *, push: Push | None = None,
+                hold_s: int = HOLD_S, height_m: float = HEIGHT_M, seed: int = 0,
+                measure: bool = True, gains: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """One high five as a JSON-ready row (:meth:`Episode.row`): what every table and sweep runs.
+
+    Args:
+        case: The plant, sensor noise, delay and control period.
+        push: A push whose ``at_s`` counts from the goal's start [s] (see :func:`hold_push`).
+        hold_s: The goal's hold [s]. height_m: Its foot height [m].
+        seed: Seed of the sensor noise.
+        measure: Add the tracking, sliding and QP-failure metrics to the row.
+        gains: :class:`wbc.ControllerConfig` fields for the controller (checked there); the
+            default controller when empty.
+    """
+    controller = None
+    if gains:
+        controller = WholeBodyController(control_period_s=case.control_period_s, **gains)
+    episode = run_high_five(case, pushes=() if push is None else (push,), hold_s=hold_s,
+                            height_m=height_m, seed=seed, measure=measure, controller=controller)
+    return episode.row()
+
+
 # ---------------------------------------------------------------------------- the tables
 
 
@@ -287,18 +310,17 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
         jobs: int | None = None) -> dict[str, Any]:
     """Run every table; returns the report (JSON-ready).
 
-    The sweeps' episodes run in ``jobs`` processes (default: every core); each episode is
+    The episodes run in ``jobs`` processes (default: every core); each episode is
     deterministic, so the rows do not depend on it.
     """
     directions = QUICK_DIRECTIONS_DEG if quick else DIRECTIONS_DEG
     impulses = QUICK_IMPULSES_NS if quick else IMPULSES_NS
-    cells = []
-    for impulse in impulses:
-        for direction in directions:
-            episode = run_high_five(pushes=[hold_push(direction, impulse)], measure=False)
-            cells.append({"direction_deg": direction, "impulse_ns": impulse, **episode.row()})
-            log(f"push {impulse:g} N s toward {direction} deg: {episode.outcome} "
-                f"({episode.status.name}, lowest base {episode.min_height_m:.3f} m)")
+    pushes = [(direction, impulse) for impulse in impulses for direction in directions]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        cells = list(pool.map(push_cell, pushes))
+    for cell in cells:
+        log(f"push {cell['impulse_ns']:g} N s toward {cell['direction_deg']} deg: "
+            f"{cell['outcome']} ({cell['status']}, lowest base {cell['min_height_m']:.3f} m)")
     outcomes = [cell["outcome"] for cell in cells]
     grid = {
         "directions_deg": list(directions), "impulses_ns": list(impulses),
@@ -307,14 +329,10 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
         "fell": outcomes.count("F"), "success_rate": outcomes.count("S") / len(outcomes),
         "any_fall": "F" in outcomes,
     }
-    plants = []
-    for case in QUICK_PLANT_CASES if quick else PLANT_CASES:
-        episode = run_high_five(case)
-        plants.append({"name": case.name, "plant": dataclasses.asdict(case.plant),
-                       "delay_ticks": case.delay_ticks,
-                       "position_noise_rad": case.position_noise_rad,
-                       "velocity_noise_rad_s": case.velocity_noise_rad_s, **episode.row()})
-        log(f"{case.name}: {episode.outcome} ({episode.status.name})")
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        plants = list(pool.map(plant_row, QUICK_PLANT_CASES if quick else PLANT_CASES))
+    for row in plants:
+        log(f"{row['name']}: {row['outcome']} ({row['status']})")
     sweeps = {}
     for name, cases in (("joint_sweep", QUICK_JOINT_SWEEP if quick else JOINT_SWEEP),
                         ("calf_sweep", QUICK_CALF_SWEEP if quick else CALF_SWEEP)):
@@ -337,25 +355,36 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
             "plant_changes": plants, **sweeps}
 
 
+def push_cell(push: tuple[float, float]) -> dict[str, Any]:
+    """One cell of the push grid: ``(direction [deg], impulse [N s])`` -> its row, unmeasured."""
+    direction, impulse = push
+    row = run_episode(push=hold_push(direction, impulse), measure=False)
+    return {"direction_deg": direction, "impulse_ns": impulse, **row}
+
+
+def plant_row(case: PlantCase) -> dict[str, Any]:
+    """One row of the plant table: the case's settings and its episode."""
+    return {"name": case.name, "plant": dataclasses.asdict(case.plant),
+            "delay_ticks": case.delay_ticks, "position_noise_rad": case.position_noise_rad,
+            "velocity_noise_rad_s": case.velocity_noise_rad_s, **run_episode(case)}
+
+
 def compensation_row(run: tuple[PlantCase, bool]) -> dict[str, Any]:
     """A sweep episode by the default controller, or by one told the plant's joint friction."""
     case, informed = run
-    controller = None
+    gains = {}
     if informed:
         joints = [getattr(case.plant, t) for t in ("hip", "thigh", "calf")]
-        controller = WholeBodyController(
-            known_joint_damping=tuple(j.damping for j in joints),
-            known_joint_friction=tuple(j.friction_loss for j in joints))
-    episode = run_high_five(case, hold_s=SWEEP_HOLD_S, controller=controller)
-    episode.loop = None
-    return {"name": case.name, "known_friction": informed, **episode.row()}
+        gains = {"known_joint_damping": tuple(j.damping for j in joints),
+                 "known_joint_friction": tuple(j.friction_loss for j in joints)}
+    return {"name": case.name, "known_friction": informed,
+            **run_episode(case, hold_s=SWEEP_HOLD_S, gains=gains)}
 
 
 def sweep_row(case: PlantCase) -> dict[str, Any]:
     """One sweep episode (a 0.40 m high five held :data:`SWEEP_HOLD_S`), as a report row."""
-    episode = run_high_five(case, hold_s=SWEEP_HOLD_S)
-    episode.loop = None  # the row only; the loop stays in the worker
-    return {"name": case.name, "plant": dataclasses.asdict(case.plant), **episode.row()}
+    return {"name": case.name, "plant": dataclasses.asdict(case.plant),
+            **run_episode(case, hold_s=SWEEP_HOLD_S)}
 
 
 def _yes(flag: bool) -> str:
@@ -399,8 +428,8 @@ def format_report(report: dict[str, Any]) -> str:
                        ("calf_sweep", "Calf friction sweep (identified joints)")):
         sweep = report[key]
         lines += ["", f"{title}, {SWEEP_HOLD_S} s hold, {sweep['wall_s']:g} s wall", "",
-                  f"{'plant':<40} {'result':<9} {'track RMS':>9} {'hold RMS':>8} "
-                  f"{'sliding':>7} {'tilt':>5} {'end tilt':>8} {'QP fail':>7}"]
+                  (f"{'plant':<40} {'result':<9} {'track RMS':>9} {'hold RMS':>8} "
+                   f"{'sliding':>7} {'tilt':>5} {'end tilt':>8} {'QP fail':>7}")]
         for row in sweep["rows"]:
             lines.append(f"{row['name']:<40} {row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
                          f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
@@ -411,8 +440,8 @@ def format_report(report: dict[str, Any]) -> str:
                      f"{sweep['max_final_tilt_deg']:.2f} deg")
     if "compensation" in report:
         lines += ["", "Known joint friction fed forward (known_joint_damping/_friction)", "",
-                  f"{'plant':<32} {'friction':<8} {'result':<9} {'track RMS':>9} "
-                  f"{'hold RMS':>8} {'sliding':>7} {'tilt':>5} {'end tilt':>8}"]
+                  (f"{'plant':<32} {'friction':<8} {'result':<9} {'track RMS':>9} "
+                   f"{'hold RMS':>8} {'sliding':>7} {'tilt':>5} {'end tilt':>8}")]
         for row in report["compensation"]["rows"]:
             lines.append(f"{row['name']:<32} {'known' if row['known_friction'] else 'unknown':<8} "
                          f"{row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
@@ -430,7 +459,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, default=Path("out/robustness.json"),
                         help="where to write the report (default: out/robustness.json)")
     parser.add_argument("--jobs", type=int, default=None,
-                        help="processes for the sweeps (default: every core)")
+                        help="processes for the episodes (default: every core)")
     args = parser.parse_args(argv)
     if args.jobs is not None and args.jobs < 1:
         parser.error(f"--jobs: expected a whole number >= 1, received {args.jobs}")
