@@ -22,7 +22,7 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e '.[test]'
+.venv/bin/python -m pip install -q -e '.[test,scale]'
 .venv/bin/python -c "import pinocchio, placo, mujoco, qpsolvers, daqp; print('setup: ok, pinocchio', pinocchio.__version__, 'placo imports, mujoco', mujoco.__version__)"
 # Compile the controller's numba kernel once now (about 20 s), not on the first run.
 echo "setup: compiling the controller kernel (once)"
