@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import os
+import threading
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     import mujoco
@@ -55,21 +56,42 @@ class ViewerHook:
     """Keeps a passive MuJoCo viewer in sync, about 60 times a simulated second.
 
     The window opens on the base, tracked (:func:`follow_base`). With an ``overlay`` it
-    draws the overlay's geoms into the viewer's user scene and its text panel (the goal's
-    phase and progress, the support feet, the CoM margin, the normal forces) at the top
-    left, at every sync.
+    draws the overlay's geoms into the viewer's user scene at every sync, and shows its
+    text panel (the goal's phase and progress, the support feet, the CoM margin, the normal
+    forces) at the top left.
+
+    The viewer's ``set_texts`` waits until the window has taken the texts, about one frame
+    (0.1 s on software GL): a thread of this hook waits for it, with the latest panel, so
+    the control loop never does.
     """
 
-    def __init__(self, sim: Go2Simulator, *, overlay: SceneOverlay | None = None):
-        import mujoco.viewer
+    def __init__(self, sim: Go2Simulator, *, overlay: SceneOverlay | None = None,
+                 handle: Any = None):
+        """Args:
+            sim: The simulator whose model and data the window shows.
+            overlay: What to draw over the robot (nothing by default).
+            handle: An open viewer handle (default: a passive viewer launched here).
+        """
+        if handle is None:
+            import mujoco.viewer
 
-        self.handle = mujoco.viewer.launch_passive(sim.model, sim.data, show_left_ui=False,
-                                                   show_right_ui=False)
+            handle = mujoco.viewer.launch_passive(sim.model, sim.data, show_left_ui=False,
+                                                  show_right_ui=False)
+        self.handle = handle
         with self.handle.lock():
             follow_base(self.handle.cam, sim.model)
         self.sim = sim
         self.overlay = overlay
         self.next_s = 0.0
+        self._texts: tuple[str, str] | None = None  # the latest panel, not yet shown
+        self._texts_lock = threading.Lock()
+        self._wake = threading.Event()
+        self._closing = False
+        self._texter: threading.Thread | None = None
+        if overlay is not None:
+            self._texter = threading.Thread(target=self._show_texts, name="viewer texts",
+                                            daemon=True)
+            self._texter.start()
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         if self.sim.time_s >= self.next_s and self.handle.is_running():
@@ -79,9 +101,7 @@ class ViewerHook:
             self.next_s = self.sim.time_s + 1.0 / 60.0
 
     def draw_overlay(self, loop: ControlLoop) -> None:
-        """Replace the user scene's geoms and the text panel with the overlay's, now."""
-        import mujoco
-
+        """Replace the user scene's geoms with the overlay's; post its text panel."""
         overlay = self.overlay
         if overlay is None:
             return
@@ -89,11 +109,30 @@ class ViewerHook:
             scene = self.handle.user_scn
             scene.ngeom = 0
             overlay.draw(scene, loop)
-        names, values = overlay.status_lines(loop)
-        self.handle.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, names, values))
+        with self._texts_lock:
+            self._texts = overlay.status_lines(loop)
+        self._wake.set()
+
+    def _show_texts(self) -> None:
+        """The text thread: hands the latest posted panel to the window, until closed."""
+        import mujoco
+
+        while True:
+            self._wake.wait()
+            self._wake.clear()
+            with self._texts_lock:
+                texts, self._texts = self._texts, None
+            if texts is not None and self.handle.is_running():
+                self.handle.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, *texts))
+            if self._closing:
+                return
 
     def close(self) -> None:
-        """Close the window."""
+        """Show the last panel posted, stop the text thread, close the window."""
+        self._closing = True
+        self._wake.set()
+        if self._texter is not None:
+            self._texter.join(timeout=5.0)
         self.handle.close()
 
 

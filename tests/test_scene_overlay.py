@@ -299,12 +299,14 @@ def test_the_status_panel_names_the_phase_progress_support_and_forces(raising):
 
 
 class _Handle:
-    """What the viewer hook uses of MuJoCo's passive viewer handle."""
+    """What the viewer hook uses of MuJoCo's passive viewer handle, recorded."""
 
     def __init__(self, model: mujoco.MjModel):
+        self.cam = mujoco.MjvCamera()
         self.user_scn = mujoco.MjvScene(model, maxgeom=2000)
         self.texts: list = []
         self.locked = 0
+        self.closed = False
 
     def lock(self):
         handle = self
@@ -318,20 +320,29 @@ class _Handle:
 
         return Lock()
 
+    def is_running(self) -> bool:
+        return not self.closed
+
     def set_texts(self, texts):
         self.texts.append(texts)
 
+    def close(self):
+        self.closed = True
 
-def test_the_viewer_hook_replaces_the_user_scene_and_the_text_panel(raising):
+
+def test_the_viewer_hook_replaces_the_user_scene_and_shows_the_panel(raising):
     loop, overlay, *_ = raising
-    hook = ViewerHook.__new__(ViewerHook)  # no window: the handle is stood in for
-    hook.handle, hook.overlay = _Handle(loop.sim.model), overlay
+    handle = _Handle(loop.sim.model)
+    hook = ViewerHook(loop.sim, overlay=overlay, handle=handle)
+    assert handle.cam.type == mujoco.mjtCamera.mjCAMERA_TRACKING
     hook.draw_overlay(loop)
-    first = hook.handle.user_scn.ngeom
+    first = handle.user_scn.ngeom
     hook.draw_overlay(loop)
-    assert hook.handle.user_scn.ngeom == first > 20  # replaced, not appended
-    assert hook.handle.locked == 2
-    font, where, names, values = hook.handle.texts[-1]
+    assert handle.user_scn.ngeom == first > 20  # replaced, not appended
+    assert handle.locked == 3  # the camera, then each drawing
+    hook.close()  # shows the last panel posted, then stops the text thread
+    assert handle.closed
+    font, where, names, values = handle.texts[-1]
     assert font is None and where == mujoco.mjtGridPos.mjGRID_TOPLEFT
     assert (names, values) == overlay.status_lines(loop)
 
