@@ -227,7 +227,7 @@ class SceneOverlay:
              size=(1.5 * FOOT_RADIUS_M, 0, 0), pos=target)
         trace = self.traces[leg]
         for a, b in itertools.pairwise(trace):
-            _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, TRACE_RGBA, 0.003, a, b)
+            _connect(scene, mujoco.mjtGeom.mjGEOM_LINE, TRACE_RGBA, 3.0, a, b)
 
     def _record_traces(self, controller: object, swing: list[str]) -> None:
         for leg in swing:
