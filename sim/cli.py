@@ -70,6 +70,7 @@ examples:
   go2-wbc high-five                         # 0.40 m, hold 2 s, headless
   go2-wbc high-five --height 0.3 --hold 0 --metrics
   go2-wbc high-five --video hf.mp4 --plot hf.png --report hf.json --log hf.npz
+  go2-wbc high-five --viewer --overlay all  # CoM, support polygon, forces, foot target
   go2-wbc high-five --push 40,0.1 --push-at 3 --push-dir 90
   go2-wbc high-five --cancel-at 2.5         # ends CANCELED with the foot down
   go2-wbc stand; go2-wbc sit --duration 1.5
