@@ -7,8 +7,7 @@ import pytest
 
 from tests.conftest import random_configuration
 from wbc import WholeBodyController
-from wbc.backends import QpProblem
-from wbc.backends import daqp_backend
+from wbc.backends import QpProblem, daqp_backend
 from wbc.backends.daqp_backend import DaqpBackend
 
 pytest.importorskip("daqp")
