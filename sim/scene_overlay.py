@@ -166,7 +166,7 @@ class SceneOverlay:
             swing = [leg for leg in LEGS if leg not in controller.stance_legs]
             self._record_traces(controller, swing)
             for leg in swing:
-                self._draw_target(scene, leg, foot_target(controller, leg))
+                self._draw_target(scene, leg, controller.foot_target(leg))
         return scene.ngeom - start
 
     def _draw_com(self, scene: mujoco.MjvScene, com: np.ndarray) -> None:
@@ -234,7 +234,7 @@ class SceneOverlay:
             trace = self.traces[leg]
             if leg not in self._swinging:  # a new lift: a new trace
                 trace.clear()
-            target = foot_target(controller, leg)
+            target = controller.foot_target(leg)
             if target is not None and (not trace or np.linalg.norm(target - trace[-1])
                                        >= _TRACE_STEP_M):
                 trace.append(target)
@@ -306,22 +306,6 @@ class SceneOverlay:
 
 
 # ---------------------------------------------------------------------- geometry
-
-
-def foot_target(controller: object, leg: str) -> np.ndarray | None:
-    """A foot's position target [m] from the controller's foot task (``None`` if unset).
-
-    :class:`wbc.WholeBodyController`'s tasks hold it in ``target``, PlaCo's in
-    ``target_world``.
-    """
-    tasks = getattr(controller, "foot_tasks", None)
-    if not tasks or leg not in tasks:
-        return None
-    task = tasks[leg]
-    target = getattr(task, "target", None)
-    if target is None:
-        target = getattr(task, "target_world", None)
-    return None if target is None else np.array(target, dtype=float).reshape(3)
 
 
 def inset_polygon(corners: np.ndarray, margin_m: float) -> np.ndarray | None:

@@ -35,6 +35,9 @@ def test_foot_positions_are_the_feet_in_leg_order(standing):
     feet = controller.foot_positions()
     for i, leg in enumerate(LEGS):
         np.testing.assert_array_equal(feet[i], controller.foot_position(leg))
+    target = controller.foot_position("FR") + [0.05, 0.0, 0.1]
+    controller.set_foot_target("FR", target)
+    np.testing.assert_array_equal(controller.foot_target("FR"), target)
 
 
 def test_stands_two_seconds_in_mujoco(standing, description):

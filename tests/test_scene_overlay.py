@@ -26,7 +26,6 @@ from sim.scene_overlay import (
     TARGET_RGBA,
     TRACE_RGBA,
     SceneOverlay,
-    foot_target,
     inset_polygon,
     parse_overlays,
 )
@@ -241,7 +240,7 @@ def test_every_overlay_is_in_the_rendered_frame(raising, frames):
         assert any(found(blue, p) for p in pixel_of(points)), leg
 
     # The raised foot's target: a magenta halo around the foot, and the trace it has followed.
-    target = foot_target(controller, "FR")
+    target = controller.foot_target("FR")
     magenta = hue_mask(frame, TARGET_RGBA, min_value=0.15)
     assert found(magenta, pixel_of(target)[0])
     trace = overlay.traces["FR"]

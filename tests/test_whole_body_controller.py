@@ -158,7 +158,7 @@ def test_references_are_set_all_or_nothing(controller, standing):
     task = controller.foot_tasks["FR"]
     np.testing.assert_array_equal(task.reference, [foot, [0.0, 0.0, 0.1], [0.0, 0.0, 1.0]])
     foot[2] += 0.01  # the caller's array is not held
-    assert task.target[2] == pytest.approx(foot[2] - 0.01)
+    assert controller.foot_target("FR")[2] == pytest.approx(foot[2] - 0.01)
     before = task.reference.copy()
     for bad, match in ((([0.1, 0.0, np.inf]), "FR_foot.target_velocity: non-finite"),
                        ((0.0, 0.0), "FR_foot.target_velocity: expected an array of shape")):

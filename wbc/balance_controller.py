@@ -75,6 +75,9 @@ class BalanceController(Protocol):
     def foot_positions(self) -> np.ndarray:
         """The four foot frames' positions (4, 3) at the last state, in ``LEGS`` order."""
 
+    def foot_target(self, leg: str) -> np.ndarray | None:
+        """A foot's position target (a copy; ``None`` before one is set)."""
+
     def shoulder_position(self, leg: str) -> np.ndarray:
         """Thigh joint position at the last state."""
 

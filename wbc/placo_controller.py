@@ -230,6 +230,11 @@ class PlacoController(ContactModes):
         """World positions (4, 3) [m] of the foot frames at the last state, ``LEGS`` order."""
         return np.array([self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3] for leg in LEGS])
 
+    def foot_target(self, leg: str) -> np.ndarray | None:
+        """A foot's world position target [m] (a copy): where the foot is held while it swings."""
+        check_name("leg", leg, LEGS)
+        return np.array(self.foot_tasks[leg].target_world, dtype=float).reshape(3)
+
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,

@@ -309,6 +309,12 @@ class WholeBodyController(ContactModes):
         """
         return self._feet_view
 
+    def foot_target(self, leg: str) -> np.ndarray | None:
+        """A foot's world position target [m] (a copy; ``None`` before one is set). It is
+        tracked while the leg swings."""
+        check_name("leg", leg, LEGS)
+        return self.foot_tasks[leg].target
+
     def set_foot_target(self, leg: str, position: np.ndarray,
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,
