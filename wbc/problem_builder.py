@@ -86,6 +86,9 @@ class _LayoutProblem:
         self.g = np.zeros(n)
         self.tau_block: ConstraintBlock | None = None
         self.reduced: QpProblem | None = None
+        #: The reduction kernel's arguments, and what they were gathered for.
+        self.reduce_args: tuple = ()
+        self.reduce_key: tuple | None = None
         if leg_columns is not None:
             self._allocate_reduction(constraints, leg_columns)
         #: The constraints written every tick (with the reduction, not the eliminated ones).
@@ -231,6 +234,7 @@ class ProblemBuilder:
 
     def _stack_tasks(self) -> None:
         """Re-allocate the stacked task rows and point every task's arrays into them."""
+        self._stacking = getattr(self, "_stacking", 0) + 1
         dims = [t.dim for t in self.tasks]
         rows = int(sum(dims))
         self._J = np.zeros((rows, self.nv))
@@ -385,10 +389,19 @@ class ProblemBuilder:
         qp_kernel.add_diagonal_cost(entry.weights, entry.rate_weights, entry.x_prev, T, t0, H, f)
 
     def _reduce(self, entry: _LayoutProblem) -> bool:
+        # The kernel's 47 arguments are gathered once per layout, task stacking and torque
+        # rate weight: every other one is an array updated in place or fixed with the layout.
+        key = (self._stacking, self.regularization.torque_rate)
+        if entry.reduce_key != key:
+            entry.reduce_args = self._reduce_arguments(entry)
+            entry.reduce_key = key
+        return qp_kernel.reduced_problem(*entry.reduce_args)
+
+    def _reduce_arguments(self, entry: _LayoutProblem) -> tuple:
         kin, task, layout, p, full = (self.kinematics, self.contact_task, entry.layout,
                                       entry.reduced, entry.full)
         L, Linv, K, X = entry.work
-        return qp_kernel.reduced_problem(
+        return (
             kin.mass_matrix, kin.nonlinear_effects, task.jacobian, task.drift,
             task.desired_acceleration, layout.loaded, self.leg_columns, entry.free_columns,
             layout.force_start, full.A, full.lower, full.upper, full.lb, full.ub,
