@@ -125,8 +125,9 @@ def run_sweep(spec: SweepSpec, results: SweepResults, runner: SweepRunner, *,
         results.append(record)
         records[episode.key] = record
         counts[outcome_of(record)] += 1
-        if "error" in outcome:
-            bar.write(f"episode {episode.label() or spec.name} failed: {outcome['error']}")
+        if "error" in outcome:  # above the bar, on standard error
+            bar.write(f"episode {episode.label() or spec.name} failed: {outcome['error']}",
+                      file=sys.stderr)
         bar.set_postfix_str(_failures(counts), refresh=False)
         bar.update(1)
 
@@ -144,7 +145,11 @@ class _NoBar:
     """Stands in for the progress bar when there is none; messages still go to the log."""
 
     def __init__(self, log: Callable[[str], None]) -> None:
-        self.write = log
+        self.log = log
+
+    def write(self, text: str, file: Any = None) -> None:
+        """A message, to the log."""
+        self.log(text)
 
     def set_postfix_str(self, text: str, refresh: bool = True) -> None:
         """Nothing to show."""
@@ -279,11 +284,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         spec = _spec(args)
         runner = SweepRunner(args.executor, jobs=args.jobs, address=args.address)
     except ConfigurationError as err:
-        message = str(err)
-        for name in ("executor", "jobs", "address"):
-            if message.startswith(f"{name}:"):
-                message = f"--{message}"
-        parser.error(message)
+        parser.error(_option(str(err)))
     episodes = unique_episodes(spec)
     if args.dry_run:
         print(f"{spec.name}: {len(episodes)} episodes")
@@ -300,6 +301,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                         progress=not args.no_progress, log=log)
     except SweepResultsError as err:
         parser.error(str(err))
+    except ConfigurationError as err:  # e.g. no Ray cluster at --address
+        parser.error(_option(str(err)))
     except KeyboardInterrupt:
         done = len(set(results.load()) & {e.key for e in episodes})
         log(f"interrupted: {done} of {len(episodes)} episodes are in {results.path}; run the "
@@ -314,10 +317,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"Wrote {results.path} and {plot}")
     errors = report.counts()["E"]
     if errors:
-        log(f"{errors} episodes raised an error (see 'error' in {results.path}); run the same "
-            f"command again to retry them")
+        them = "them" if errors > 1 else "it"
+        log(f"{errors} episode{'s' if errors > 1 else ''} raised an error (see 'error' in "
+            f"{results.path}); run the same command again to retry {them}")
         return EXIT_EPISODE_ERRORS
     return EXIT_OK
+
+
+def _option(message: str) -> str:
+    """``jobs: ...`` -> ``--jobs: ...`` (the runner's fields are options here)."""
+    for name in ("executor", "jobs", "address"):
+        if message.startswith(f"{name}:"):
+            return f"--{message}"
+    return message
 
 
 def _interrupt(signum: int, frame: Any) -> None:

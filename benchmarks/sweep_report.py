@@ -38,11 +38,6 @@ def cell_text(counts: Counter[str]) -> str:
     return "".join(f"{counts[o]}{o}" for o in reversed(OUTCOMES) if counts[o])
 
 
-def worst(counts: Counter[str]) -> str:
-    """The worst outcome present."""
-    return next(o for o in OUTCOMES if counts[o])
-
-
 @dataclass
 class Panel:
     """One heat map: outcomes counted per (x value, y value), over every other field."""
@@ -120,13 +115,13 @@ class SweepReport:
                                  gridspec_kw={"width_ratios": widths}, squeeze=False)
         for ax, panel in zip(axes[0], panels):
             self._draw(ax, panel)
-        present = [o for o in reversed(OUTCOMES) if self.counts()[o]]
+        present = [o for o in reversed(OUTCOMES) if o in "SAF" or self.counts()[o]]
         fig.legend(handles=[Patch(facecolor=COLOURS[o], edgecolor="0.3",
                                   label=f"{o} {OUTCOME_NAMES[o]}") for o in present],
                    loc="lower center", ncol=len(present), frameon=False)
         total = len(self.rows)
-        fig.suptitle(f"{self.spec.name}: {total} episodes, each cell's worst outcome "
-                     f"(counts when a cell holds several)", fontsize=10)
+        fig.suptitle(f"{self.spec.name}: {total} episodes; a cell holding several is split by "
+                     f"their outcomes (counts on it)", fontsize=10)
         fig.tight_layout(rect=(0, 0.08, 1, 0.93))
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -136,26 +131,33 @@ class SweepReport:
 
     @staticmethod
     def _draw(ax: Any, panel: Panel) -> None:
-        from matplotlib.colors import to_rgb
+        """Each cell split left to right by its outcomes' shares (S, A, F, E), counts on top."""
+        from matplotlib.patches import Rectangle
 
         nx, ny = len(panel.x_values), len(panel.y_values)
-        image = [[to_rgb(COLOURS[worst(panel.cells.get((x, y), Counter({"-": 1})))])
-                  for x in panel.x_values] for y in panel.y_values]
-        ax.imshow(image, origin="lower", aspect="auto")
         for i, y in enumerate(panel.y_values):
             for j, x in enumerate(panel.x_values):
                 counts = panel.cells.get((x, y), Counter({"-": 1}))
+                left, total = j - 0.5, sum(counts.values())
+                for outcome in reversed(OUTCOMES):
+                    width = counts[outcome] / total
+                    if width:
+                        ax.add_patch(Rectangle((left, i - 0.5), width, 1.0, linewidth=0,
+                                               facecolor=COLOURS[outcome]))
+                        left += width
                 text = cell_text(counts)
                 ax.text(j, i, text, ha="center", va="center",
                         fontsize=9 if len(text) <= 2 else 7)
+        ax.set_xlim(-0.5, nx - 0.5)
+        ax.set_ylim(-0.5, ny - 0.5)
         ax.set_xticks(range(nx), [value_text(v) for v in panel.x_values])
         ax.set_yticks(range(ny), [value_text(v) for v in panel.y_values])
         ax.set_xlabel(TITLES.get(panel.x, panel.x))
         ax.set_ylabel(TITLES.get(panel.y, panel.y))
-        ax.set_xticks([k - 0.5 for k in range(1, nx)], minor=True)
-        ax.set_yticks([k - 0.5 for k in range(1, ny)], minor=True)
-        ax.grid(which="minor", color="white", linewidth=1.5)
-        ax.tick_params(which="minor", length=0)
+        for k in range(1, nx):
+            ax.axvline(k - 0.5, color="white", linewidth=1.5)
+        for k in range(1, ny):
+            ax.axhline(k - 0.5, color="white", linewidth=1.5)
 
     # ------------------------------------------------------------------ tables
 

@@ -30,6 +30,9 @@ RAY_INSTALL = (
 #: Tasks queued per worker beyond the running one: keeps workers busy between results while
 #: an interrupted sweep has few tasks to cancel.
 QUEUED_PER_WORKER = 1
+#: How long [s] a cluster's HOST:PORT may take to accept a connection (Ray itself retries
+#: for minutes).
+CONNECT_TIMEOUT_S = 5.0
 #: Object store of a local Ray instance [bytes]: the tasks pass a few kilobytes each.
 LOCAL_OBJECT_STORE_BYTES = 200 * 2**20
 
@@ -71,8 +74,9 @@ class SweepRunner:
             ``None`` starts a local instance.
 
     Raises:
-        ConfigurationError: An unknown executor, ``jobs`` below 1, ``address`` without Ray,
-            or ``ray`` asked for where it is not installed (the message says how to get it).
+        ConfigurationError: An unknown executor, ``jobs`` below 1, ``address`` without Ray
+            or where nothing listens, or ``ray`` asked for where it is not installed (the
+            message says how to get it).
     """
 
     def __init__(self, executor: str = "auto", *, jobs: int | None = None,
@@ -100,6 +104,8 @@ class SweepRunner:
                          f"For Ray (every core, or a cluster with --address): {RAY_INSTALL}")
         elif executor == "auto":
             executor = "ray"
+        if address is not None:
+            _check_listening(address)
         self.executor = executor
         self.jobs = jobs
         self.address = address
@@ -177,7 +183,15 @@ class SweepRunner:
                      log_to_driver=False, logging_level=logging.ERROR,
                      object_store_memory=LOCAL_OBJECT_STORE_BYTES)
         elif started_here:
-            ray.init(address=self.address, log_to_driver=False, logging_level=logging.ERROR)
+            try:
+                ray.init(address=self.address, log_to_driver=False,
+                         logging_level=logging.ERROR)
+            except (ConnectionError, RuntimeError, ValueError) as err:
+                reason = str(err).strip().splitlines()[0] if str(err).strip() else repr(err)
+                raise ConfigurationError(
+                    f"address: cannot connect to a Ray cluster at {self.address!r} ({reason}); "
+                    f"expected the address of a running cluster: auto on one of its nodes, "
+                    f"HOST:6379, or ray://HOST:10001") from err
         if callable(on_term) and threading.current_thread() is threading.main_thread():
             # Ray's driver replaces the SIGTERM handler; the caller's (a clean stop) comes back.
             signal.signal(signal.SIGTERM, on_term)
@@ -220,3 +234,23 @@ class SweepRunner:
             for ref in running:
                 ray.cancel(ref, force=True)
             raise
+
+
+def _check_listening(address: str) -> None:
+    """Fail at once when nothing accepts connections at a ``HOST:PORT`` address.
+
+    ``auto`` and ``ray://`` addresses are left to Ray.
+
+    Raises:
+        ConfigurationError: No connection within :data:`CONNECT_TIMEOUT_S`.
+    """
+    host, sep, port = address.rpartition(":")
+    if "://" in address or not sep or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT_S).close()
+    except OSError as err:
+        raise ConfigurationError(
+            f"address: cannot connect to a Ray cluster at {address!r} "
+            f"({err.strerror or err}); expected the address of a running cluster: auto on one "
+            f"of its nodes, HOST:6379, or ray://HOST:10001") from None

@@ -12,7 +12,7 @@ from benchmarks import robustness, sweep_runner
 from benchmarks.sweep import main, run_sweep
 from benchmarks.sweep_results import SweepResults
 from benchmarks.sweep_runner import RAY_INSTALL, SweepRunner
-from benchmarks.sweep_spec import DIRECTIONS, SweepSpec
+from benchmarks.sweep_spec import DIRECTIONS, EpisodeSpec, SweepSpec
 from wbc.errors import ConfigurationError
 
 PROG = "python -m benchmarks.sweep"
@@ -123,6 +123,30 @@ def test_ray_gives_the_serial_results(serial, tmp_path, capsys, monkeypatch):
     assert len(by_key(path)) == 4 and out.splitlines()[3:6] == QUICK_TABLE
 
 
+def test_an_episode_that_raises_is_recorded_and_retried_on_resume(tmp_path, monkeypatch,
+                                                                   capsys):
+    ran = []
+
+    def fake_run(episode):  # no simulation: the bookkeeping only
+        ran.append(episode.get(DIRECTIONS))
+        if episode.get(DIRECTIONS) == 90.0 and len(ran) < 3:
+            raise RuntimeError("boom")
+        return {"outcome": "S", "status": "SUCCEEDED", "min_height_m": 0.3, "max_tilt_deg": 1.0}
+
+    monkeypatch.setattr(EpisodeSpec, "run", fake_run)
+    args = ["pushes", "--directions", "0,90", "--impulses", "4", "--executor", "serial",
+            "--no-progress", "--results", str(tmp_path / "r.jsonl")]
+    assert main(args) == 1
+    out, err = capsys.readouterr()
+    assert "episode pushes.directions_deg=90 failed: RuntimeError: boom" in err
+    assert "1 episode raised an error (see 'error' in " in err
+    assert err.endswith("; run the same command again to retry it\n")
+    assert "succeeded 1/2 (50 %), aborted 0, fell 0; any fall: no; errors 1" in out
+    assert main(args) == 0  # only the failed one runs again
+    assert ran == [0.0, 90.0, 90.0]
+    assert "succeeded 2/2 (100 %)" in capsys.readouterr().out
+
+
 def test_without_ray_auto_runs_the_process_pool_and_says_how_to_get_ray(monkeypatch, capsys):
     monkeypatch.setattr(sweep_runner, "ray_installed", lambda: False)
     runner = SweepRunner("auto")
@@ -140,6 +164,17 @@ def test_without_ray_auto_runs_the_process_pool_and_says_how_to_get_ray(monkeypa
     assert capsys.readouterr().err == (
         f"{PROG}: error: --address: address 'auto' needs Ray, which is not installed here; "
         f"{RAY_INSTALL}, or run executor 'process' (see '{PROG} --help')\n")
+
+
+def test_an_address_where_no_cluster_listens_is_a_usage_error_at_once(capsys):
+    pytest.importorskip("ray", reason="Ray is an optional extra: pip install '.[scale]'")
+    with pytest.raises(SystemExit) as exit_:
+        main(["quick", "--address", "127.0.0.1:1", "--results", "/nonexistent/quick.jsonl"])
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == (
+        f"{PROG}: error: --address: cannot connect to a Ray cluster at '127.0.0.1:1' (Connection "
+        f"refused); expected the address of a running cluster: auto on one of its nodes, "
+        f"HOST:6379, or ray://HOST:10001 (see '{PROG} --help')\n")
 
 
 @pytest.mark.parametrize(("args", "message"), [
