@@ -33,7 +33,7 @@ from typing import Any, NoReturn
 
 from benchmarks.sweep_report import SweepReport, outcome_of
 from benchmarks.sweep_results import SweepResults, SweepResultsError
-from benchmarks.sweep_runner import EXECUTORS, RAY_INSTALL, SweepRunner
+from benchmarks.sweep_runner import EXECUTORS, SweepRunner
 from benchmarks.sweep_spec import (
     BUILT_IN,
     DEFAULT_SWEEP,
@@ -169,7 +169,7 @@ def _progress_bar(*, total: int, initial: int, desc: str, enabled: bool,
     try:
         from tqdm import tqdm
     except ImportError:
-        log(f"no progress bar: tqdm is not installed; {RAY_INSTALL} installs it with Ray")
+        log("no progress bar: tqdm is not installed (pip install tqdm)")
         return _NoBar(log)
     return tqdm(total=total, initial=initial, desc=desc, unit="episode", file=sys.stderr,
                 dynamic_ncols=True, mininterval=0.5)

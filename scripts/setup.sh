@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Create .venv (when missing) and install the package with its test extras.
+# Create .venv (when missing) and install the package with its test and scale (Ray) extras.
 # Also installs Debian's Mesa OSMesa library, which offscreen video rendering needs, when
 # it is missing and apt-get is usable (root or passwordless sudo); skipped otherwise.
 set -euo pipefail
