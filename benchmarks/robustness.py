@@ -29,6 +29,7 @@ import argparse
 import dataclasses
 import json
 import math
+import multiprocessing
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -316,7 +317,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
     directions = QUICK_DIRECTIONS_DEG if quick else DIRECTIONS_DEG
     impulses = QUICK_IMPULSES_NS if quick else IMPULSES_NS
     pushes = [(direction, impulse) for impulse in impulses for direction in directions]
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    with process_pool(jobs, preload=[__name__]) as pool:
         cells = list(pool.map(push_cell, pushes))
     for cell in cells:
         log(f"push {cell['impulse_ns']:g} N s toward {cell['direction_deg']} deg: "
@@ -329,7 +330,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
         "fell": outcomes.count("F"), "success_rate": outcomes.count("S") / len(outcomes),
         "any_fall": "F" in outcomes,
     }
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    with process_pool(jobs, preload=[__name__]) as pool:
         plants = list(pool.map(plant_row, QUICK_PLANT_CASES if quick else PLANT_CASES))
     for row in plants:
         log(f"{row['name']}: {row['outcome']} ({row['status']})")
@@ -337,7 +338,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
     for name, cases in (("joint_sweep", QUICK_JOINT_SWEEP if quick else JOINT_SWEEP),
                         ("calf_sweep", QUICK_CALF_SWEEP if quick else CALF_SWEEP)):
         started = time.perf_counter()
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
+        with process_pool(jobs, preload=[__name__]) as pool:
             rows = list(pool.map(sweep_row, cases))
         for row in rows:
             log(f"{name} {row['name']}: {row['outcome']} ({row['status']}), tilt "
@@ -348,11 +349,26 @@ def run(*, quick: bool, log: Callable[[str], None] = print,
                         "max_final_tilt_deg": max(r["final_tilt_deg"] for r in rows)}
     if not quick:
         runs = [(case, informed) for case in COMPENSATION_CASES for informed in (False, True)]
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
+        with process_pool(jobs, preload=[__name__]) as pool:
             sweeps["compensation"] = {"rows": list(pool.map(compensation_row, runs))}
     return {"mode": "quick" if quick else "full", "machine": machine(),
             "goal": {"target_height_m": HEIGHT_M, "hold_s": HOLD_S}, "push_grid": grid,
             "plant_changes": plants, **sweeps}
+
+
+def process_pool(workers: int | None, *, preload: Sequence[str] = ()) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes (default: every core) that does not fork this process.
+
+    Forking a process that runs threads (numba's, Ray's, the viewer's) may deadlock the child,
+    and Python 3.12 warns of it: the workers are forked from a clean forkserver that has
+    imported ``preload`` once, or spawned where there is no forkserver.
+    """
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(list(preload))
+    else:
+        context = multiprocessing.get_context("spawn")
+    return ProcessPoolExecutor(max_workers=workers, mp_context=context)
 
 
 def push_cell(push: tuple[float, float]) -> dict[str, Any]:

@@ -9,16 +9,16 @@ from __future__ import annotations
 
 import importlib.util
 import logging
-import multiprocessing
 import os
 import signal
 import socket
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from typing import Any
 
+from benchmarks.robustness import process_pool
 from benchmarks.sweep_spec import EpisodeSpec
 from wbc.errors import ConfigurationError
 
@@ -135,14 +135,8 @@ class SweepRunner:
         self.description = f"process pool ({workers} processes)"
         if not episodes:
             return
-        # forkserver: workers forked from a clean server that has imported the episode code
-        # once (no fork of this threaded process, no import per worker); spawn elsewhere.
-        if "forkserver" in multiprocessing.get_all_start_methods():
-            context = multiprocessing.get_context("forkserver")
-            context.set_forkserver_preload(["benchmarks.sweep_runner"])
-        else:
-            context = multiprocessing.get_context("spawn")
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+        # Workers forked from a clean server that has imported the episode code once.
+        pool = process_pool(workers, preload=["benchmarks.sweep_runner"])
         waiting = iter(episodes)
         running: dict[Future[dict[str, Any]], EpisodeSpec] = {}
 
