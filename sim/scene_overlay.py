@@ -193,7 +193,7 @@ class SceneOverlay:
             _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, POLYGON_RGBA, 0.006, a, b)
             _triangle(scene, POLYGON_FILL_RGBA, centre, a, b)
         margin = float(getattr(getattr(controller, "config", None), "support_margin_m", 0.0))
-        inner = inset_polygon(corners, margin)
+        inner = SupportPolygon(margin_m=margin).inset(corners)
         if inner is not None:
             inner_ring = _on_floor(inner, z=_FLOOR_Z + 0.001)
             for a, b in zip(inner_ring, np.roll(inner_ring, -1, axis=0)):
@@ -306,27 +306,6 @@ class SceneOverlay:
 
 
 # ---------------------------------------------------------------------- geometry
-
-
-def inset_polygon(corners: np.ndarray, margin_m: float) -> np.ndarray | None:
-    """The polygon of ``corners`` (k, 2+) with every edge moved ``margin_m`` [m] inwards.
-
-    The region the controller keeps the CoM in (:class:`wbc.support_polygon.SupportPolygon`
-    with that margin). Returns its corners (k, 2) counter-clockwise, or ``None`` when the
-    margin leaves nothing.
-    """
-    normals, offsets = SupportPolygon(margin_m=margin_m).halfplanes(corners)
-    k = len(normals)
-    inner = np.empty((k, 2))
-    for i in range(k):
-        j = (i + 1) % k  # edges i and j meet at corner j of the ordered polygon
-        matrix = np.vstack([normals[i], normals[j]])
-        if abs(np.linalg.det(matrix)) < 1e-12:
-            return None
-        inner[j] = np.linalg.solve(matrix, [offsets[i], offsets[j]])
-    if np.any(normals @ inner.T - offsets[:, None] < -1e-9):
-        return None
-    return inner
 
 
 def _on_floor(points: np.ndarray, z: float = _FLOOR_Z) -> np.ndarray:

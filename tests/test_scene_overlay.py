@@ -26,13 +26,13 @@ from sim.scene_overlay import (
     TARGET_RGBA,
     TRACE_RGBA,
     SceneOverlay,
-    inset_polygon,
     parse_overlays,
 )
 from sim.video_recorder import VideoRecorder
 from sim.viewer import ViewerHook
 from wbc.description import FOOT_RADIUS_M, LEGS
 from wbc.errors import ConfigurationError
+from wbc.support_polygon import SupportPolygon
 
 #: Simulated time [s] of the rendered frame: the high five's foot is rising (goal sent at 0).
 FRAME_S = 2.6
@@ -65,14 +65,6 @@ def test_an_unknown_overlay_name_is_refused_by_the_constructor():
     with pytest.raises(ConfigurationError, match=r"unknown overlay 'cop'; valid overlays: "
                                                  r"com, polygon, forces, measured, target"):
         SceneOverlay(("com", "cop"))
-
-
-def test_the_margin_moves_every_edge_inwards():
-    square = np.array([[0.2, 0.1], [-0.2, 0.1], [-0.2, -0.1], [0.2, -0.1]])
-    inner = inset_polygon(square, 0.015)
-    expected = [[0.185, 0.085], [-0.185, 0.085], [-0.185, -0.085], [0.185, -0.085]]
-    assert sorted(map(tuple, inner.round(12))) == sorted(map(tuple, np.round(expected, 12)))
-    assert inset_polygon(square, 0.11) is None  # nothing left of a 0.2 m wide polygon
 
 
 # ----------------------------------------------------------------------------- a frame
@@ -185,8 +177,8 @@ def test_every_overlay_is_in_the_rendered_frame(raising, frames):
                                                              min_saturation=0.25)
     corners = np.array([feet[leg] for leg in ("FL", "RL", "RR")])
     corners[:, 2] = 0.003
-    inner = np.column_stack([inset_polygon(corners, controller.config.support_margin_m),
-                             np.full(3, 0.004)])
+    inset = SupportPolygon(margin_m=controller.config.support_margin_m).inset(corners)
+    inner = np.column_stack([inset, np.full(3, 0.004)])
     margin = hue_mask(frame, MARGIN_RGBA)
     along = np.linspace(0.2, 0.8, 7)[:, None]
     for i in range(3):

@@ -44,3 +44,12 @@ def test_corner_count_is_checked(count):
     points = np.zeros((MAX_CORNERS + 1, 2))
     with pytest.raises(ValueError, match=f"count: expected 3 to {MAX_CORNERS} corners"):
         shrunk_signed_distance(points, (0.0, 0.0), count=count)
+
+
+def test_the_margin_moves_every_edge_inwards():
+    square = np.array([[0.2, 0.1], [-0.2, 0.1], [-0.2, -0.1], [0.2, -0.1]])
+    inner = SupportPolygon(margin_m=0.015).inset(square)
+    expected = [[0.185, 0.085], [-0.185, 0.085], [-0.185, -0.085], [0.185, -0.085]]
+    assert sorted(map(tuple, inner.round(12))) == sorted(map(tuple, np.round(expected, 12)))
+    # Nothing is left of a 0.2 m wide polygon.
+    assert SupportPolygon(margin_m=0.11).inset(square) is None

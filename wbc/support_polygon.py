@@ -155,6 +155,25 @@ class SupportPolygon:
         normals, offsets = SupportPolygon(margin_m=0.0).halfplanes(points)
         return float(np.min(normals @ np.asarray(point, dtype=float)[:2] - offsets))
 
+    def inset(self, points: np.ndarray) -> np.ndarray | None:
+        """The polygon shrunk by the margin: every edge moved ``margin_m`` inwards.
+
+        Returns its corners (k, 2) counter-clockwise (corner ``j`` where the inset edges
+        ``j - 1`` and ``j`` meet), or ``None`` when the margin leaves nothing of it.
+        """
+        normals, offsets = self.halfplanes(points)
+        k = len(normals)
+        corners = np.empty((k, 2))
+        for i in range(k):
+            j = (i + 1) % k
+            matrix = np.vstack([normals[i], normals[j]])
+            if abs(np.linalg.det(matrix)) < 1e-12:
+                return None
+            corners[j] = np.linalg.solve(matrix, [offsets[i], offsets[j]])
+        if np.any(normals @ corners.T - offsets[:, None] < -1e-9):
+            return None
+        return corners
+
     def closest_inside(self, points: np.ndarray, point: np.ndarray) -> np.ndarray:
         """The point of the polygon shrunk by the margin that is closest to ``point`` (2,).
 
@@ -165,19 +184,11 @@ class SupportPolygon:
         normals, offsets = self.halfplanes(points)
         if np.all(normals @ point - offsets >= 0.0):
             return point.copy()
-        k = len(normals)
-        # Corners of the shrunk polygon: intersections of consecutive inset edges.
-        corners = []
-        for i in range(k):
-            j = (i + 1) % k
-            corners.append(np.linalg.solve(np.vstack([normals[i], normals[j]]),
-                                           [offsets[i], offsets[j]]))
-        corners = np.array(corners)
-        if np.any(normals @ corners.T - offsets[:, None] < -1e-9):
+        corners = self.inset(points)
+        if corners is None:
             raise ValueError(f"margin {self.margin_m} m leaves nothing of the support polygon")
         best, best_distance = corners[0], np.inf
-        for i in range(k):
-            a, b = corners[i - 1], corners[i]  # the inset edge i runs between these corners
+        for a, b in zip(corners, np.roll(corners, -1, axis=0)):  # the inset edges
             ab = b - a
             t = np.clip((point - a) @ ab / max(ab @ ab, 1e-18), 0.0, 1.0)
             candidate = a + t * ab
