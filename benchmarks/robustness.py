@@ -407,20 +407,31 @@ def _yes(flag: bool) -> str:
     return "yes" if flag else "no"
 
 
+def push_grid_lines(directions: Sequence[str], impulses: Sequence[str],
+                    cell: Callable[[str, str], str]) -> list[str]:
+    """The push grid as text: a row per impulse, a column per direction, each cell
+    ``cell(impulse, direction)`` (columns at least 4 characters wide)."""
+    width = max(4, *(len(cell(i, d)) for i in impulses for d in directions)) + 1
+    lines = ["impulse [N s] | direction [deg]",
+             "              |" + "".join(f"{d:>{width}}" for d in directions)]
+    for impulse in impulses:
+        lines.append(f"{impulse:>13} |" + "".join(
+            f"{cell(impulse, d):>{width}}" for d in directions))
+    return lines
+
+
 def format_report(report: dict[str, Any]) -> str:
     """The two tables as text."""
     grid = report["push_grid"]
     title = (f"Pushes on the base during the hold ({grid['duration_s']:g} s, starting "
              f"{grid['starts_into_hold_s']:g} s into a {report['goal']['hold_s']} s hold of a "
              f"{report['goal']['target_height_m']:.2f} m high five)")
-    lines = [title,
-             "S succeeded, A aborted (foot put down, robot up), F fell", "",
-             "impulse [N s] | direction [deg]",
-             "              | " + " ".join(f"{d:>4}" for d in grid["directions_deg"])]
-    outcome = {(c["impulse_ns"], c["direction_deg"]): c["outcome"] for c in grid["cells"]}
-    for impulse in grid["impulses_ns"]:
-        lines.append(f"{impulse:>13g} | " + " ".join(
-            f"{outcome[impulse, d]:>4}" for d in grid["directions_deg"]))
+    outcome = {(f"{c['impulse_ns']:g}", str(c["direction_deg"])): c["outcome"]
+               for c in grid["cells"]}
+    lines = [title, "S succeeded, A aborted (foot put down, robot up), F fell", "",
+             *push_grid_lines([str(d) for d in grid["directions_deg"]],
+                              [f"{i:g}" for i in grid["impulses_ns"]],
+                              lambda impulse, direction: outcome[impulse, direction])]
     total = len(grid["cells"])
     lines += ["", f"succeeded {grid['succeeded']}/{total} ({100 * grid['success_rate']:.0f} %), "
               f"aborted {grid['aborted']}, fell {grid['fell']}; any fall: "

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmarks.robustness import push_grid_lines
 from benchmarks.sweep_spec import DIRECTIONS, IMPULSES, EpisodeSpec, SweepSpec, value_text
 
 #: Outcomes from worst to best: E the episode raised, F fell, A aborted with the robot up,
@@ -188,18 +189,12 @@ class SweepReport:
                 f"({', '.join(a.path for a in spec.case_axes)})" if cases > 1 else "")
         panel = next(p for p in self.panels() if (p.x, p.y) == (DIRECTIONS, IMPULSES))
         texts = panel.text()
-        directions = [value_text(d) for d in panel.x_values]
-        width = max(4, *(len(t) for t in texts.values())) + 1
-        lines = [f"Pushes on the base during the hold ({push}{goal})",
-                 (f"S succeeded, A aborted (foot put down, robot up), F fell"
-                  f"{', E error' if self.counts()['E'] else ''}{over}"), "",
-                 "impulse [N s] | direction [deg]",
-                 "              |" + "".join(f"{d:>{width}}" for d in directions)]
-        for impulse in panel.y_values:
-            shown = value_text(impulse)
-            lines.append(f"{shown:>13} |" + "".join(
-                f"{texts[d, shown]:>{width}}" for d in directions))
-        return lines
+        return [f"Pushes on the base during the hold ({push}{goal})",
+                (f"S succeeded, A aborted (foot put down, robot up), F fell"
+                 f"{', E error' if self.counts()['E'] else ''}{over}"), "",
+                *push_grid_lines([value_text(d) for d in panel.x_values],
+                                 [value_text(i) for i in panel.y_values],
+                                 lambda impulse, direction: texts[direction, impulse])]
 
     def _cases(self) -> list[str]:
         axes = [a.path for a in self.spec.case_axes]
