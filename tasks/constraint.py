@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tasks.compiled_call import bind_compiled
+
 if TYPE_CHECKING:
     from tasks.kinematics import RobotKinematics
     from tasks.variable_layout import VariableLayout
@@ -70,18 +72,20 @@ class Constraint:
         """
         call = self._call
         if call is not None and call[0] is kinematics and call[1] is block:
-            call[2](*call[3])
+            call[2]()
             return
         compiled = self._compiled_call(kinematics, layout, block)
         if compiled is None:
             raise NotImplementedError(f"{type(self).__name__}.update")
-        self._call = (kinematics, block, *compiled)
-        compiled[0](*compiled[1])
+        bound = bind_compiled(compiled[0], *compiled[1])
+        self._call = (kinematics, block, bound)
+        bound()
 
     def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
                        block: ConstraintBlock) -> tuple | None:
         """``(kernel, arguments)`` writing this constraint's entries, or ``None``."""
         return None
 
-    #: The cached ``(kinematics, block, kernel, arguments)`` of a compiled constraint.
+    #: The cached ``(kinematics, block, bound kernel)`` of a compiled constraint (see
+    #: :func:`tasks.compiled_call.bind_compiled`).
     _call: tuple | None = None

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
+from tasks.compiled_call import bind_compiled
 from wbc.errors import ConfigurationError
 from wbc.validation import as_float, as_vector
 
@@ -189,7 +190,7 @@ class Task:
         """
         call = self._call
         if call is not None and call[0] is kinematics:
-            call[1](*call[2])
+            call[1]()
             return
         compiled = self._compiled_call(kinematics)
         if compiled is None:
@@ -198,8 +199,9 @@ class Task:
             desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
             desired += self.reference[2]
             return
-        self._call = (kinematics, *compiled)
-        compiled[0](*compiled[1])
+        bound = bind_compiled(compiled[0], *compiled[1])
+        self._call = (kinematics, bound)
+        bound()
 
     def _compiled_call(self, kinematics: RobotKinematics) -> tuple | None:
         """``(kernel, arguments)`` that fill this task's arrays, or ``None`` (use compute).
@@ -209,7 +211,8 @@ class Task:
         """
         return None
 
-    #: The cached ``(kinematics, kernel, arguments)`` of a compiled task.
+    #: The cached ``(kinematics, bound kernel)`` of a compiled task (see
+    #: :func:`tasks.compiled_call.bind_compiled`).
     _call: tuple | None = None
 
     def compute(self, kinematics: RobotKinematics) -> None:

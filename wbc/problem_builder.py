@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tasks.compiled_call import bind_compiled
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.contact_task import ContactTask
 from tasks.floating_base_dynamics import FloatingBaseDynamics
@@ -86,8 +87,8 @@ class _LayoutProblem:
         self.g = np.zeros(n)
         self.tau_block: ConstraintBlock | None = None
         self.reduced: QpProblem | None = None
-        #: The reduction kernel's arguments, and what they were gathered for.
-        self.reduce_args: tuple = ()
+        #: The reduction kernel bound to its arguments, and what they were gathered for.
+        self.reduce_call: Callable[[], bool] | None = None
         self.reduce_key: tuple | None = None
         if leg_columns is not None:
             self._allocate_reduction(constraints, leg_columns)
@@ -393,9 +394,10 @@ class ProblemBuilder:
         # rate weight: every other one is an array updated in place or fixed with the layout.
         key = (self._stacking, self.regularization.torque_rate)
         if entry.reduce_key != key:
-            entry.reduce_args = self._reduce_arguments(entry)
+            entry.reduce_call = bind_compiled(qp_kernel.reduced_problem,
+                                              *self._reduce_arguments(entry))
             entry.reduce_key = key
-        return qp_kernel.reduced_problem(*entry.reduce_args)
+        return entry.reduce_call()
 
     def _reduce_arguments(self, entry: _LayoutProblem) -> tuple:
         kin, task, layout, p, full = (self.kinematics, self.contact_task, entry.layout,

@@ -27,6 +27,7 @@ from tasks import (
     Task,
     TorqueLimits,
 )
+from tasks.compiled_call import bind_compiled
 from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
 from wbc.contact_modes import ContactModes
 from wbc.control_output import ControlOutput, ControlStatus
@@ -166,8 +167,10 @@ class WholeBodyController(ContactModes):
         self.ticks = 0
         self.failures = 0
         self._forces = np.zeros((_NC, 3))
-        self._error_arrays = (self.com_task.error, self.base_task.error, self.posture_task.error,
-                              *(self.foot_tasks[leg].error for leg in LEGS))
+        # The tasks' error arrays are never re-bound: their norms' call is bound once.
+        self._error_norms = bind_compiled(
+            _error_norms, self.com_task.error, self.base_task.error, self.posture_task.error,
+            *(self.foot_tasks[leg].error for leg in LEGS))
 
     @property
     def tau_max(self) -> np.ndarray:
@@ -412,7 +415,7 @@ class WholeBodyController(ContactModes):
         self._tau_good = tau_qp
         self._forces = forces
         command = self.motor.shape(q[7:], v[6:], x[6:_NV], tau_qp)
-        norms = _error_norms(*self._error_arrays)
+        norms = self._error_norms()
         task_errors = {"com": norms[0], "base_orientation": norms[1], "posture": norms[2]}
         for leg in self._swing_legs:
             task_errors[leg + "_foot"] = norms[3 + _LEG_INDEX[leg]]
