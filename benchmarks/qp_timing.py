@@ -23,6 +23,8 @@ Four tables, all measured through the library's public API:
 from __future__ import annotations
 
 import argparse
+import contextlib
+import ctypes
 import importlib.metadata
 import json
 import os
@@ -30,7 +32,7 @@ import platform
 import sys
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -66,6 +68,30 @@ QUICK_TIMING = LegLiftTiming(shift_s=0.5005, unload_s=0.3005)
 SCALING_TIMING = LegLiftTiming(shift_s=0.5005, unload_s=0.3005, raise_s=0.8005)
 PACKAGES = ("pin", "placo", "mujoco", "daqp", "osqp", "qpsolvers", "numpy", "proxsuite", "piqp",
             "quadprog")
+
+
+@contextlib.contextmanager
+def c_stdout_silenced() -> Iterator[None]:
+    """Discard what C libraries print on the process's standard output inside the block.
+
+    OSQP 1.x prints "Polishing not needed - no active set detected at optimal point" on
+    every solve whose active set is empty, whatever its ``verbose`` setting (its issue 785),
+    which would interleave dozens of lines with the report. The episodes run in this one
+    thread, so redirecting file descriptor 1 hides nothing else; Python's output is flushed
+    before, C's buffers before the descriptor is restored.
+    """
+    sys.stdout.flush()
+    libc = ctypes.CDLL(None)
+    saved = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 1)
+        yield
+    finally:
+        libc.fflush(None)
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(devnull)
 
 
 @dataclass
@@ -536,8 +562,9 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
         except Exception as err:  # noqa: BLE001 - a broken backend becomes a skipped row
             rows.append({"name": name, "skipped": f"{type(err).__name__}: {err}"})
             continue
-        episode = run_episode(controller, hold_s=hold_s, stop_after_s=stop,
-                              timing=QUICK_TIMING if quick else None)
+        with c_stdout_silenced():
+            episode = run_episode(controller, hold_s=hold_s, stop_after_s=stop,
+                                  timing=QUICK_TIMING if quick else None)
         rows.append(backend_row(name, episode))
     rows += [{"name": name, "skipped": reason} for name, reason in missing_backends().items()]
     placo = next((r for r in rows if r["name"] == PLACO and not r["skipped"]), None)

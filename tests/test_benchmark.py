@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ctypes
 import json
 import platform
 
@@ -99,3 +100,15 @@ def test_scaling_and_episode_tables(quick_run):
 def test_plot_is_a_png(quick_run):
     _, png_path = quick_run
     assert png_path.read_bytes()[:8] == PNG_SIGNATURE
+
+
+def test_c_stdout_silenced_discards_c_output_inside_the_block_only(capfd):
+    libc = ctypes.CDLL(None)
+    print("before", flush=True)
+    with qp_timing.c_stdout_silenced():
+        libc.printf(b"from C inside\n")
+    libc.printf(b"from C after\n")
+    libc.fflush(None)
+    out = capfd.readouterr().out
+    assert "from C inside" not in out
+    assert "before" in out and "from C after" in out

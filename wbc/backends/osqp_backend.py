@@ -25,6 +25,11 @@ class OsqpBackend(QpBackend):
     structure, no new setup. Tolerances are tight and the solution is polished: at OSQP's
     default tolerance (1e-3) the friction constraints of this problem are violated by about
     1e-3.
+
+    OSQP 1.1 prints "Polishing not needed - no active set detected at optimal point" to
+    standard output on every solve whose active set is empty, ``verbose`` or not (OSQP's
+    issue 785); this backend does not hide it, since redirecting the process's output is
+    not safe in a threaded program (``benchmarks.qp_timing`` does, around its episodes).
     """
 
     name = "osqp"
