@@ -495,10 +495,9 @@ class JointSpline:
 # ---------------------------------------------------------------------- validation helpers
 
 
-@cache
 def _description() -> Go2Description:
-    """The GO2 description, loaded on first use (not on import)."""
-    return Go2Description()
+    """The GO2 description shared by the process (its limits computed once)."""
+    return Go2Description.default()
 
 
 def _fail(code: int, message: str) -> NoReturn:

@@ -55,7 +55,7 @@ class ControlLoop:
         self.runner.set_spinner(self.spin_once)
         q, v = self.robot.read_state()
         controller.reset(q, v)
-        self._effort_limit = Go2Description().effort_limit
+        self._effort_limit = Go2Description.default().effort_limit
         self.context.observe(self.robot.time_s, q, v)
         self.hooks: list[TickHook] = []
         self.last_output: ControlOutput | None = None

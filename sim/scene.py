@@ -47,7 +47,7 @@ def build_go2_spec(
             floor, a sky, a shadow-casting light and coloured links. Visual only; ``False``
             gives a plain grey scene with the same physics.
     """
-    description = description or Go2Description()
+    description = description or Go2Description.default()
     timestep_s = as_float("timestep_s", timestep_s, low=1e-5, high=0.01)
     if isinstance(plant, str):
         plant = Plant.preset(plant)

@@ -108,7 +108,7 @@ class Go2Simulator:
             plant: The physics the controller's model does not know: a
                 :class:`sim.plant.Plant` or a preset name (:data:`sim.plant.PLANT_PRESETS`).
         """
-        self.description = description or Go2Description()
+        self.description = description or Go2Description.default()
         self.plant = Plant.preset(plant) if isinstance(plant, str) else plant
         self.spec = build_go2_spec(self.description, timestep_s=timestep_s,
                                    actuator_order=actuator_order, plant=self.plant)

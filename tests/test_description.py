@@ -73,7 +73,10 @@ def test_missing_distribution_says_what_to_install(monkeypatch):
         raise importlib.metadata.PackageNotFoundError(name)
 
     monkeypatch.setattr(desc_module.importlib.metadata, "distribution", missing)
+    desc_module._installed_go2_folder.cache_clear()  # found once a process: look again
     with pytest.raises(DescriptionNotFoundError, match="pip install example-robot-data==6.0.0"):
+        Go2Description()
+    with pytest.raises(DescriptionNotFoundError):  # a failure is not cached
         Go2Description()
 
 
@@ -83,5 +86,22 @@ def test_distribution_without_go2_files(monkeypatch):
         files = []
 
     monkeypatch.setattr(desc_module.importlib.metadata, "distribution", lambda name: Empty())
+    desc_module._installed_go2_folder.cache_clear()
     with pytest.raises(DescriptionNotFoundError, match="has no .*go2.urdf"):
         Go2Description()
+
+
+def test_folder_is_found_once_a_process(monkeypatch):
+    desc_module._installed_go2_folder.cache_clear()
+    folder = Go2Description().folder
+
+    def scanned_again(name):
+        raise AssertionError("the distribution was scanned again")
+
+    monkeypatch.setattr(desc_module.importlib.metadata, "distribution", scanned_again)
+    assert Go2Description().folder == folder
+
+
+def test_default_is_one_description_a_process():
+    assert Go2Description.default() is Go2Description.default()
+    assert Go2Description.default().model is Go2Description.default().model

@@ -6,7 +6,7 @@ import importlib.metadata
 import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +58,14 @@ def _find_go2_folder() -> Path:
     )
 
 
+@lru_cache(maxsize=1)
+def _installed_go2_folder() -> Path:
+    """:func:`_find_go2_folder`, once a process: scanning the distribution's ~1000 files
+    takes about 10 ms, and the installed files do not move while the process runs. (A
+    failure is not cached: it is raised again, with its advice, on the next call.)"""
+    return _find_go2_folder()
+
+
 @dataclass(frozen=True)
 class Go2Description:
     """Where the GO2 files are, and the facts every other module takes from them.
@@ -67,7 +75,13 @@ class Go2Description:
     ``v = [base linear (base frame), base angular (base frame), joints...]`` (18).
     """
 
-    folder: Path = field(default_factory=_find_go2_folder)
+    folder: Path = field(default_factory=_installed_go2_folder)
+
+    @staticmethod
+    def default() -> Go2Description:
+        """The description of the installed files, one instance a process: its model,
+        limits and poses are computed once, for every part that needs them."""
+        return _default_description()
 
     @property
     def urdf_path(self) -> Path:
@@ -181,3 +195,8 @@ class Go2Description:
         """Indices (description order) of a leg's hip, thigh and calf joints."""
         check_name("leg", leg, LEGS)
         return [JOINT_NAMES.index(f"{leg}_{part}_joint") for part in _PARTS]
+
+
+@lru_cache(maxsize=1)
+def _default_description() -> Go2Description:
+    return Go2Description()

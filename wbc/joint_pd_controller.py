@@ -36,7 +36,7 @@ class JointPdController:
             stance_legs: Legs assumed on the ground for gravity compensation.
             description: The robot files (found automatically by default).
         """
-        self.description = description or Go2Description()
+        self.description = description or Go2Description.default()
         self.model = self.description.model
         self.data = self.model.createData()
         self.q_ref = as_vector("q_ref", q_ref, 19)

@@ -87,7 +87,7 @@ class PlacoController(ContactModes):
             valid = ", ".join(ControllerConfig.__dataclass_fields__)
             raise ConfigurationError(f"unknown parameter(s) {unknown}; valid parameters: {valid}")
         self.config = cfg = replace(config or ControllerConfig(), **overrides)
-        self.description = description or Go2Description()
+        self.description = description or Go2Description.default()
         # PlaCo resolves the URDF's package:// mesh URIs even when it ignores collisions.
         self.description.set_ros_package_path()
         self.robot = robot = placo.RobotWrapper(str(self.description.urdf_path),

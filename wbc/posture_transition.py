@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+from functools import lru_cache
 
 import numpy as np
 import pinocchio as pin
@@ -22,6 +23,26 @@ class TransitionPhase(str, enum.Enum):
     DONE = "done"
 
 
+@lru_cache(maxsize=8)
+def _pose_geometry(description: Go2Description, pose: str
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A pose's configuration (19,), its centre of mass relative to its feet (3,) and each
+    foot relative to its shoulder (4, 2) [m], computed once: a behaviour starts a
+    transition inside a control tick, where a forward kinematics pass and a new model
+    would cost about a millisecond."""
+    q_pose = description.pose(pose)
+    model = description.model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q_pose)
+    feet = np.array([data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation for leg in LEGS])
+    com = pin.centerOfMass(model, data, q_pose)
+    com_offset = np.array([*(com[:2] - feet[:, :2].mean(axis=0)),
+                           com[2] - (feet[:, 2].min() - FOOT_RADIUS_M)])
+    shoulders = np.array([data.oMi[model.getJointId(f"{leg}_thigh_joint")].translation[:2]
+                          for leg in LEGS])
+    return q_pose, com_offset, feet[:, :2] - shoulders
+
+
 class PostureTransition:
     """Brings the robot to a named pose (``standing`` or ``lying``) with its feet where they are.
 
@@ -36,28 +57,20 @@ class PostureTransition:
             controller: The whole-body controller.
             pose: ``"standing"`` or ``"lying"``.
             duration_s: Duration of the motion [s] (after any foot placement).
-            description: The robot files (found automatically by default).
+            description: The robot files (the controller's by default).
         """
         self.controller = controller
-        self.description = description or Go2Description()
+        self.description = (description or getattr(controller, "description", None)
+                            or Go2Description.default())
         self.pose = check_name("pose", pose, self.description.poses)
         self.duration_s = as_float("duration_s", duration_s, low=0.2, high=30.0)
         self.phase: TransitionPhase | None = None
-        self._q_pose = self.description.pose(pose)
-        model = self.description.model
-        data = model.createData()
-        pin.framesForwardKinematics(model, data, self._q_pose)
-        feet = np.array([data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation
-                         for leg in LEGS])
-        com = pin.centerOfMass(model, data, self._q_pose)
+        q_pose, com_offset, under_shoulder = _pose_geometry(self.description, pose)
+        self._q_pose = q_pose.copy()
         #: The pose's centre of mass relative to its feet: xy from their centroid, z above ground.
-        self.com_offset = np.array([*(com[:2] - feet[:, :2].mean(axis=0)),
-                                    com[2] - (feet[:, 2].min() - FOOT_RADIUS_M)])
-        shoulder = {leg: data.oMi[model.getJointId(f"{leg}_thigh_joint")].translation
-                    for leg in LEGS}
+        self.com_offset = com_offset.copy()
         #: Where a foot stands relative to its shoulder in the pose (xy).
-        self.foot_under_shoulder = {leg: feet[i, :2] - shoulder[leg][:2]
-                                    for i, leg in enumerate(LEGS)}
+        self.foot_under_shoulder = {leg: under_shoulder[i].copy() for i, leg in enumerate(LEGS)}
         self._placing: LegLift | None = None
         self.progress = 0.0
 
