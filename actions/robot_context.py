@@ -36,6 +36,11 @@ class RobotContext:
         self.consecutive_fallbacks = 0
         #: Rows of ``foot_positions()`` that make each support polygon seen so far.
         self._support_rows: dict[tuple[str, ...], np.ndarray] = {}
+        # The balance watch first runs when a foot unloads, mid-motion, where loading its
+        # compiled code (its first call in a process) would stall that tick for
+        # milliseconds: load it now, with arguments of the types the watch passes.
+        capture_point_margin(controller.foot_positions(), np.arange(len(LEGS)), np.zeros(3),
+                             np.zeros(3), 1.0, _GRAVITY)
 
     def record_output(self, out: ControlOutput) -> None:
         """Record the command sent this tick; any tick that is not OK is a controller fault."""

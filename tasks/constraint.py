@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -71,15 +73,28 @@ class Constraint:
         arguments are gathered once per kinematics and block.
         """
         call = self._call
-        if call is not None and call[0] is kinematics and call[1] is block:
-            call[2]()
-            return
+        if call is None or call[0] is not kinematics or call[1] is not block:
+            call = self._call = (kinematics, block, self.tick_call(kinematics, layout, block))
+        call[2]()
+
+    def tick_call(self, kinematics: RobotKinematics, layout: VariableLayout,
+                  block: ConstraintBlock) -> Callable[[], None]:
+        """A callable of no arguments that writes this tick's entries into ``block``.
+
+        A problem builder keeps one per layout and calls it every tick. A built-in
+        constraint's is its compiled kernel bound to its arrays
+        (:func:`tasks.compiled_call.bind_compiled`; getting it loads the compiled code, so
+        the first tick in a layout does not); a constraint that overrides :meth:`update`
+        gets that method with these arguments. Its arrays are read when it runs, but
+        scalars are taken as they are now: a constraint whose setters change a value the
+        call reads must change an array in place.
+        """
+        if type(self).update is not Constraint.update:
+            return functools.partial(self.update, kinematics, layout, block)
         compiled = self._compiled_call(kinematics, layout, block)
         if compiled is None:
             raise NotImplementedError(f"{type(self).__name__}.update")
-        bound = bind_compiled(compiled[0], *compiled[1])
-        self._call = (kinematics, block, bound)
-        bound()
+        return bind_compiled(compiled[0], *compiled[1])
 
     def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
                        block: ConstraintBlock) -> tuple | None:

@@ -203,6 +203,21 @@ class Task:
         self._call = (kinematics, bound)
         bound()
 
+    def prepare(self, kinematics: RobotKinematics) -> None:
+        """Bind the compiled kernel to this task's arrays now, which loads its compiled code
+        (milliseconds for a kernel's first call in a process), rather than on the first
+        tick that runs the task. Nothing for a task written in Python, or one that cannot
+        run yet (no target): that one binds on its first tick."""
+        call = self._call
+        if call is not None and call[0] is kinematics:
+            return
+        try:
+            compiled = self._compiled_call(kinematics)
+        except ConfigurationError:  # no target yet
+            return
+        if compiled is not None:
+            self._call = (kinematics, bind_compiled(compiled[0], *compiled[1]))
+
     def _compiled_call(self, kinematics: RobotKinematics) -> tuple | None:
         """``(kernel, arguments)`` that fill this task's arrays, or ``None`` (use compute).
 

@@ -30,17 +30,17 @@ class TorqueLimits(Constraint):
             tau_max: Torque limit of each actuated joint [N m] (nv - 6,).
         """
         self.contacts = contacts
-        self.tau_max = tau_max
+        self._tau_max = as_vector("tau_max", tau_max, contacts.nv - 6)
 
     @property
     def tau_max(self) -> np.ndarray:
-        """Torque limit of each actuated joint [N m]."""
-        return self._tau_max
+        """Torque limit of each actuated joint [N m] (a copy)."""
+        return self._tau_max.copy()
 
     @tau_max.setter
     def tau_max(self, value: np.ndarray) -> None:
-        self._tau_max = as_vector("tau_max", value, self.contacts.nv - 6)
-        self._call = None  # the cached kernel call holds the previous array
+        # In place: the bound kernel calls of every layout read this array.
+        self._tau_max[:] = as_vector("tau_max", value, self.contacts.nv - 6)
 
     def rows(self, layout: VariableLayout) -> int:
         return layout.nv - 6
@@ -50,4 +50,4 @@ class TorqueLimits(Constraint):
         return constraint_kernels.equation_of_motion_rows, (
             kinematics.mass_matrix, kinematics.nonlinear_effects, self.contacts.jacobian,
             layout.loaded, layout.force_columns, 6, block.A, block.lower, block.upper,
-            self.tau_max)
+            self._tau_max)

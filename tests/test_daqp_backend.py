@@ -95,3 +95,57 @@ def test_another_release_goes_through_the_wrapper(monkeypatch):
     result = backend.solve(problem)
     assert result.found and not backend.uses_direct_call
     np.testing.assert_allclose(result.x, [1.0, 2.0])
+
+
+def _unit_problem(n: int, f: list[float]) -> QpProblem:
+    problem = QpProblem(n, 0)
+    problem.H[:] = np.eye(n)
+    problem.f[:] = f
+    return problem
+
+
+def test_each_problem_keeps_its_structures_across_switches(monkeypatch):
+    backend = DaqpBackend()
+    setups = []
+    setup = DaqpBackend.setup
+    monkeypatch.setattr(DaqpBackend, "setup", lambda self, p: (setups.append(p), setup(self, p)))
+    four, three = _unit_problem(2, [-1.0, -2.0]), _unit_problem(3, [-1.0, -2.0, -3.0])
+    for _ in range(3):  # feet down, foot up, ... as a controller's layouts switch
+        np.testing.assert_allclose(backend.solve(four).x, [1.0, 2.0])
+        np.testing.assert_allclose(backend.solve(three).x, [1.0, 2.0, 3.0])
+    assert setups == [four, three]
+
+
+def test_prepare_builds_a_problem_without_changing_the_current_one(monkeypatch):
+    backend = DaqpBackend()
+    current, other = _unit_problem(2, [-1.0, -2.0]), _unit_problem(3, [-3.0, -2.0, -1.0])
+    backend.solve(current)
+    backend.prepare(other)
+    setups = []
+    monkeypatch.setattr(DaqpBackend, "setup", lambda self, p: setups.append(p))
+    np.testing.assert_allclose(backend.solve(current).x, [1.0, 2.0])
+    np.testing.assert_allclose(backend.solve(other).x, [3.0, 2.0, 1.0])
+    assert setups == []
+
+
+def test_a_changed_structure_or_setup_builds_anew():
+    backend = DaqpBackend()
+    problem = QpProblem(2, 1)
+    problem.H[:] = np.eye(2)
+    problem.A[:] = [[1.0, 1.0]]
+    problem.lower[:], problem.upper[:] = [-np.inf], [np.inf]
+    problem.f[:] = [-1.0, -2.0]
+    np.testing.assert_allclose(backend.solve(problem).x, [1.0, 2.0])
+    problem.is_equality[:] = True  # x1 + x2 = 0 now
+    problem.lower[:], problem.upper[:] = [0.0], [0.0]
+    problem.structure_version += 1
+    np.testing.assert_allclose(backend.solve(problem).x, [-0.5, 0.5], atol=1e-12)
+
+
+def test_it_keeps_a_bounded_number_of_problems():
+    backend = DaqpBackend()
+    problems = [_unit_problem(2, [-1.0, -float(k)]) for k in range(40)]
+    for k, problem in enumerate(problems):
+        np.testing.assert_allclose(backend.solve(problem).x, [1.0, float(k)])
+    assert len(backend._states) <= daqp_backend._KEPT_PROBLEMS
+    np.testing.assert_allclose(backend.solve(problems[0]).x, [1.0, 0.0])  # evicted: rebuilt

@@ -223,3 +223,47 @@ def test_backends_agree_with_daqp(backend, standing, model):
         np.testing.assert_allclose(b.tau_ff, a.tau_ff, atol=atol)
         eq, ineq = other.problem.violations(other.last_solution)
         assert eq < 1e-5 and ineq < 1e-5
+
+
+def _lift_in_lockstep(controllers, model, standing):
+    """Step the controllers through the same states, FR unloaded and raised halfway."""
+    outputs = [[] for _ in controllers]
+    for i, (q, v) in enumerate(perturbed_states(model, standing, 12, seed=11)):
+        for c, out in zip(controllers, outputs):
+            if i == 6:
+                c.set_max_normal_force("FR", 0.0)
+                c.set_swing("FR")
+            out.append(c.step(q, v))
+    return outputs
+
+
+def test_reset_prepares_the_raised_foot_layouts_without_changing_any_tick(monkeypatch, model,
+                                                                          standing):
+    import wbc.whole_body_controller as module
+
+    prepared = WholeBodyController()
+    prepared.reset(standing)
+    monkeypatch.setattr(module, "_PREPARED_SUPPORTS", ())
+    lazy = WholeBodyController()
+    lazy.reset(standing)
+    assert len(prepared.builder._layouts) == 5 and len(lazy.builder._layouts) == 1
+    assert prepared.builder.layout.loaded.tolist() == [0, 1, 2, 3]  # still on four feet
+    for a, b in zip(*_lift_in_lockstep([prepared, lazy], model, standing)):
+        assert a.ok and b.ok
+        for field in ("tau", "q_des", "dq_des", "tau_ff", "qdd", "forces"):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    assert len(prepared.builder._layouts) == 5  # the raise used a prepared layout
+
+
+def test_torque_limits_changed_after_reset_reach_every_prepared_layout(standing, model):
+    c = WholeBodyController()
+    c.reset(standing)
+    limits = c.tau_max
+    limits[:] = 0.0  # a copy: the controller's limits are unchanged
+    np.testing.assert_allclose(c.tau_max, 0.9 * c.description.effort_limit)
+    c.tau_max = 0.5 * c.description.effort_limit
+    _lift_in_lockstep([c], model, standing)  # ends on three feet, in a prepared layout
+    problem, h = c.builder.problem, c.kinematics.nonlinear_effects[6:]
+    rows = [i for i, group in enumerate(problem.row_groups) if group == "torque limits"]
+    np.testing.assert_allclose(problem.upper[rows] + h, 0.5 * c.description.effort_limit)
+    np.testing.assert_allclose(problem.lower[rows] + h, -0.5 * c.description.effort_limit)

@@ -6,7 +6,10 @@ import numba
 import numpy as np
 
 
-@numba.njit(cache=True)
+# Explicit signatures: numba compiles (or reads from its cache) these at import, not at
+# their first call, which would cost milliseconds inside the control tick that starts a
+# motion.
+@numba.njit("UniTuple(float64, 3)(float64)", cache=True)
 def min_jerk(tau: float) -> tuple[float, float, float]:
     """Phase ``s``, ``ds/dtau`` and ``d2s/dtau2`` of the minimum-jerk profile at ``tau``.
 
@@ -38,7 +41,8 @@ def min_jerk_segment(start: np.ndarray, end: np.ndarray, elapsed_s: float,
     return start + s * delta, (ds / duration_s) * delta, (dds / duration_s**2) * delta
 
 
-@numba.njit(cache=True)
+@numba.njit("void(float64[:, :], float64[:], float64[:], float64, float64, float64, float64)",
+            cache=True)
 def min_jerk_reference(out: np.ndarray, start: np.ndarray, end: np.ndarray, elapsed_s: float,
                        duration_s: float, lateral_delay: float,
                        lateral_share: float) -> None:  # pragma: no cover - compiled

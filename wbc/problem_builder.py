@@ -95,6 +95,8 @@ class _LayoutProblem:
         #: The constraints written every tick (with the reduction, not the eliminated ones).
         self.per_tick = [(c, b) for c, b in zip(constraints, self.blocks)
                          if self.reduced is None or not isinstance(c, _ELIMINATED)]
+        #: Their tick calls (:meth:`tasks.Constraint.tick_call`), bound once for this layout.
+        self.calls: list[Callable[[], None]] | None = None
 
     def _allocate_reduction(self, constraints: Sequence[Constraint],
                             leg_columns: np.ndarray) -> None:
@@ -301,34 +303,73 @@ class ProblemBuilder:
         current = self._current
         if current is not None:
             return current
-        if self._current is None:
-            slacks = tuple(s for c in self.constraints for s in c.slacks)
-            key = (self._loaded, slacks)
-            entry = self._layouts.get(key)
-            if entry is None:
-                layout = VariableLayout(self.nv, self.contacts, self._loaded, slacks)
-                reducible = (self.reduce and self.leg_columns is not None
-                             and sum(isinstance(c, FloatingBaseDynamics)
-                                     for c in self.constraints) == 1
-                             and sum(isinstance(c, StanceContacts)
-                                     for c in self.constraints) == 1)
-                entry = _LayoutProblem(layout, self.constraints, self.regularization,
-                                       self.leg_columns if reducible else None)
-                for constraint, block in zip(self.constraints, entry.blocks):
-                    if isinstance(constraint, TorqueLimits):
-                        entry.tau_block = block
-                self._layouts[key] = entry
-            previous = self._last
-            if previous is not None and previous is not entry:
-                _carry_over(previous, entry)
+        entry = self._entry(self._loaded)
+        previous = self._last
+        if previous is not None and previous is not entry:
+            _carry_over(previous, entry)
+        for constraint, block in zip(self.constraints, entry.blocks):
+            constraint.setup(entry.layout, block)
+        self._current = entry
+        self._last = entry
+        return entry
+
+    def _entry(self, loaded: tuple[str, ...]) -> _LayoutProblem:
+        """The layout of these loaded contacts, allocated on first use."""
+        slacks = tuple(s for c in self.constraints for s in c.slacks)
+        key = (loaded, slacks)
+        entry = self._layouts.get(key)
+        if entry is None:
+            layout = VariableLayout(self.nv, self.contacts, loaded, slacks)
+            reducible = (self.reduce and self.leg_columns is not None
+                         and sum(isinstance(c, FloatingBaseDynamics)
+                                 for c in self.constraints) == 1
+                         and sum(isinstance(c, StanceContacts) for c in self.constraints) == 1)
+            entry = _LayoutProblem(layout, self.constraints, self.regularization,
+                                   self.leg_columns if reducible else None)
             for constraint, block in zip(self.constraints, entry.blocks):
-                constraint.setup(entry.layout, block)
-            entry.full.structure_version += 1
+                if isinstance(constraint, TorqueLimits):
+                    entry.tau_block = block
+            self._layouts[key] = entry
+        return entry
+
+    def prepare(self, loaded_sets: Sequence[Sequence[str]]) -> list[QpProblem]:
+        """Get the layouts of these sets of loaded contacts ready before they are needed.
+
+        Allocates each layout's arrays and binds its compiled calls (the constraints', the
+        reduction's, and every registered task's, active or not): a layout's first tick,
+        and a kernel's first call in a process (read from numba's cache), otherwise cost
+        milliseconds, at the moment a foot leaves or touches the ground. The current layout
+        and everything the next tick computes are left as they were. A task that cannot run
+        yet (no target) is left to bind on its first tick.
+
+        Returns:
+            The QPs the tick will solve in these layouts (the reduced ones where the
+            reduction applies), for a solver backend to prepare.
+        """
+        kin = self.kinematics
+        for task in self.tasks:
+            task.prepare(kin)
+        self.contact_task.prepare(kin)
+        problems = []
+        for contacts in loaded_sets:
+            unknown = sorted(set(contacts) - set(self.contacts))
+            if unknown:
+                raise ConfigurationError(f"contacts: unknown contact(s) {unknown}; valid "
+                                         f"contacts: {list(self.contacts)}")
+            entry = self._entry(tuple(c for c in self.contacts if c in set(contacts)))
+            self._bind_calls(entry)
             if entry.reduced is not None:
-                entry.reduced.structure_version += 1
-            self._current = entry
-            self._last = entry
-        return self._current
+                self._bind_reduction(entry)
+                problems.append(entry.reduced)
+            else:
+                problems.append(entry.full)
+        return problems
+
+    def _bind_calls(self, entry: _LayoutProblem) -> list[Callable[[], None]]:
+        if entry.calls is None:
+            entry.calls = [constraint.tick_call(self.kinematics, entry.layout, block)
+                           for constraint, block in entry.per_tick]
+        return entry.calls
 
     # ------------------------------------------------------------------ the tick
 
@@ -341,12 +382,12 @@ class ProblemBuilder:
         """
         kin = self.kinematics
         entry = self._problem()
+        calls = entry.calls if entry.calls is not None else self._bind_calls(entry)
         self.contact_task.update(kin)
         for task in self._active_tasks:
             task.update(kin)
-        layout = entry.layout
-        for constraint, block in entry.per_tick:
-            constraint.update(kin, layout, block)
+        for call in calls:
+            call()
         self._stale = entry.reduced is not None
 
     def _refresh_eliminated(self, entry: _LayoutProblem) -> None:
@@ -392,12 +433,15 @@ class ProblemBuilder:
     def _reduce(self, entry: _LayoutProblem) -> bool:
         # The kernel's 47 arguments are gathered once per layout, task stacking and torque
         # rate weight: every other one is an array updated in place or fixed with the layout.
+        return self._bind_reduction(entry)()
+
+    def _bind_reduction(self, entry: _LayoutProblem) -> Callable[[], bool]:
         key = (self._stacking, self.regularization.torque_rate)
         if entry.reduce_key != key:
             entry.reduce_call = bind_compiled(qp_kernel.reduced_problem,
                                               *self._reduce_arguments(entry))
             entry.reduce_key = key
-        return entry.reduce_call()
+        return entry.reduce_call
 
     def _reduce_arguments(self, entry: _LayoutProblem) -> tuple:
         kin, task, layout, p, full = (self.kinematics, self.contact_task, entry.layout,

@@ -42,6 +42,9 @@ from wbc.validation import as_vector, check_name
 _NV, _NJ, _NC = 18, 12, 4
 _LEG_INDEX = {leg: i for i, leg in enumerate(LEGS)}
 _ALL_LEGS = tuple(LEGS)
+#: The loaded feet whose QP layouts :meth:`WholeBodyController.reset` prepares: all four,
+#: and each foot raised.
+_PREPARED_SUPPORTS = (_ALL_LEGS, *(tuple(leg for leg in LEGS if leg != up) for up in LEGS))
 #: Per-tick decay of the orientation integral while not on four loaded feet (0.1 s).
 _INTEGRAL_FADE = 0.99
 
@@ -99,7 +102,7 @@ class WholeBodyController(ContactModes):
             raise ConfigurationError(f"unknown parameter(s) {unknown}; valid parameters: {valid}")
         self.config = replace(base, **overrides)
         cfg = self.config
-        self.description = description or Go2Description()
+        self.description = description or Go2Description.default()
         self.model = self.description.build_model()
         self.data = self.model.createData()
         self.backend = make_backend(cfg.backend)
@@ -261,6 +264,11 @@ class WholeBodyController(ContactModes):
         self.builder.reset_rates(x_prev)
         self.motor.reference.reset(q[7:], v[6:])
         self.backend.setup(self.builder.assemble_full())
+        # The layouts a raised or landed foot switches to, with their compiled calls and
+        # solver structures, made now: made on first use they cost milliseconds, at the
+        # very tick the foot leaves or touches the ground.
+        for problem in self.builder.prepare(_PREPARED_SUPPORTS):
+            self.backend.prepare(problem)
 
     def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
                        acceleration: np.ndarray | None = None) -> None:

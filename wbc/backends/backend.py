@@ -29,6 +29,11 @@ class QpBackend(abc.ABC):
     def solve(self, problem: QpProblem) -> QpResult:
         """Solve the current ``problem``."""
 
+    def prepare(self, problem: QpProblem) -> None:
+        """Build, ahead of its first solve, what solving ``problem`` needs, without changing
+        what the next solve of another problem uses (a controller prepares the layouts it
+        may switch to). Nothing by default."""
+
 
 _REGISTRY: dict[str, Callable[[], QpBackend]] = {}
 _MISSING: dict[str, str] = {}

@@ -7,6 +7,7 @@ import importlib.metadata
 import logging
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -159,6 +160,22 @@ def _direct_call_works() -> bool:
         return False
 
 
+#: How many problems' structures a backend keeps (a controller uses about five layouts).
+_KEPT_PROBLEMS = 16
+
+
+@dataclass
+class _ProblemState:
+    """What one problem's solves reuse: its ``sense`` flags (with the hot start's active
+    set), the flags it started from, and the direct call on its arrays."""
+
+    problem: QpProblem
+    version: int
+    sense: np.ndarray
+    base_sense: np.ndarray
+    call: _DirectCall | None
+
+
 class DaqpBackend(QpBackend):
     """DAQP called once per tick on the problem's arrays, in place (no copies).
 
@@ -190,36 +207,55 @@ class DaqpBackend(QpBackend):
         self.settings = {"primal_tol": primal_tol, "iter_limit": iter_limit}
         self.hot_start = hot_start
         self.direct = direct
-        self._sense = np.zeros(0, dtype=np.int32)
-        self._base_sense = np.zeros(0, dtype=np.int32)
-        self._problem: QpProblem | None = None
-        self._version = -1
-        self._call: _DirectCall | None = None
+        self._state: _ProblemState | None = None
+        #: The state of each problem solved lately, by ``id``: a controller switches between
+        #: a few layouts' problems as feet lift and land, and each keeps its structures.
+        self._states: dict[int, _ProblemState] = {}
 
     def setup(self, problem: QpProblem) -> None:
-        self._sense = np.zeros(problem.n + problem.m, dtype=np.int32)
-        self._sense[problem.n:][problem.is_equality] = _EQUALITY
-        self._base_sense = self._sense.copy()
-        self._problem, self._version = problem, problem.structure_version
-        self._call = None
+        """Build the problem's structures anew (also after a failure: DAQP's may be spent)."""
+        sense = np.zeros(problem.n + problem.m, dtype=np.int32)
+        sense[problem.n:][problem.is_equality] = _EQUALITY
+        call = None
         if self.direct:
             if DaqpBackend._direct_ok is None:
                 DaqpBackend._direct_ok = _direct_call_works()
             if DaqpBackend._direct_ok:
-                self._call = _DirectCall(problem, self._sense, **self.settings)
+                call = _DirectCall(problem, sense, **self.settings)
+        state = _ProblemState(problem, problem.structure_version, sense, sense.copy(), call)
+        self._states.pop(id(problem), None)
+        while len(self._states) >= _KEPT_PROBLEMS:  # the oldest goes
+            del self._states[next(iter(self._states))]
+        self._states[id(problem)] = self._state = state
+
+    def prepare(self, problem: QpProblem) -> None:
+        if not self._usable(self._states.get(id(problem)), problem):
+            current = self._state
+            self.setup(problem)
+            self._state = current
 
     @property
     def uses_direct_call(self) -> bool:
         """Whether the last solve called DAQP's C function directly (else ``daqp.solve``)."""
-        return self._call is not None
+        return self._state is not None and self._state.call is not None
+
+    @staticmethod
+    def _usable(state: _ProblemState | None, problem: QpProblem) -> bool:
+        """Whether ``state`` was built for ``problem`` as it is now (structure and arrays)."""
+        return (state is not None and state.problem is problem
+                and state.version == problem.structure_version
+                and (state.call is None or state.call.fits(problem, state.sense)))
 
     def solve(self, problem: QpProblem) -> QpResult:
-        if problem is not self._problem or problem.structure_version != self._version:
-            self.setup(problem)
-        call = self._call
-        if call is not None and not call.fits(problem, self._sense):
-            self.setup(problem)  # an array was replaced on the problem
-            call = self._call
+        state = self._state
+        if not self._usable(state, problem):
+            state = self._states.get(id(problem))
+            if self._usable(state, problem):
+                self._state = state
+            else:  # new, changed, or an array replaced on the problem
+                self.setup(problem)
+                state = self._state
+        call = state.call
         start = time.perf_counter()
         if call is not None:
             exitflag, iterations = call()
@@ -227,7 +263,7 @@ class DaqpBackend(QpBackend):
         else:
             settings = self.settings
             x, _, exitflag, info = daqp.solve(problem.H, problem.f, problem.A, problem.bupper,
-                                              problem.blower, self._sense,
+                                              problem.blower, state.sense,
                                               primal_tol=settings["primal_tol"],
                                               iter_limit=settings["iter_limit"])
             iterations, lam = int(info.get("iterations", 0)), info.get("lam")
@@ -236,10 +272,11 @@ class DaqpBackend(QpBackend):
         # Python floats it is cheaper than any NumPy reduction at this size.
         found = (exitflag == 1 or exitflag == 2) and math.isfinite(sum(x.tolist()))
         if self.hot_start:  # the next solve starts from this active set (a solved one only)
-            np.copyto(self._sense, self._base_sense)
+            sense = state.sense
+            np.copyto(sense, state.base_sense)
             if found:
-                self._sense[lam != 0.0] |= _ACTIVE
-                self._sense[lam < 0.0] |= _LOWER
+                sense[lam != 0.0] |= _ACTIVE
+                sense[lam < 0.0] |= _LOWER
         if found:
             return QpResult(found=True, x=x, solve_time_s=elapsed, iterations=iterations)
         status = _EXIT_FLAGS.get(exitflag, f"exit flag {exitflag}")
