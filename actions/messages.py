@@ -41,6 +41,8 @@ import typing
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+import numpy as np
+
 from actions.errors import UnknownFieldError
 from actions.validation import is_finite_real
 from wbc.errors import ConfigurationError
@@ -146,6 +148,9 @@ def _coerce(hint: Any, value: Any, where: str, *, copy: bool) -> Any:
     """
     if typing.get_origin(hint) is list:
         (item_hint,) = typing.get_args(hint)
+        if item_hint is float and type(value) is np.ndarray and value.ndim == 1 and (
+                value.dtype.kind == "f"):
+            return value.tolist()  # what the loop below gives, without a path per element
         if isinstance(value, str | bytes | dict) or not hasattr(value, "__iter__"):
             raise ConfigurationError(
                 f"{where} must be a sequence (list, tuple or array); received {_describe(value)}"

@@ -451,3 +451,13 @@ def test_parser_errors_name_the_source_and_line() -> None:
     with pytest.raises(ConfigurationError) as info:
         parse_action_text("---\nint32 CODE = x\n---\n", source="Bad.action")
     assert str(info.value) == "Bad.action:2: constant CODE = 'x' is not a valid int32"
+
+
+def test_float_arrays_become_lists_of_python_floats():
+    for array in (np.array([0.5, -1.25]), np.array([0.5, -1.25], dtype=np.float32),
+                  np.array([[0.5, -1.25]])[0]):
+        point = JointTrajectoryPoint(positions=array)
+        assert point.positions == [0.5, -1.25]
+        assert all(type(x) is float for x in point.positions)
+    with pytest.raises(ConfigurationError, match=r"positions\[0\] must be a real number"):
+        JointTrajectoryPoint(positions=np.array(["0.5", "x"]))  # not float arrays: checked
