@@ -14,7 +14,13 @@ _NJ = 12
 _JOINT_TYPE = np.tile(np.arange(3), len(LEGS))
 
 
-@numba.njit(cache=True)
+# An explicit signature: compiled (or read from numba's cache) at import rather than at the
+# first tick, which it would stall for milliseconds. The measured state and the QP's
+# outputs may have any layout; the shaper's own arrays are C-contiguous.
+@numba.njit("void(float64[:], float64[:], float64[:], float64[:], float64, float64[::1], "
+            "float64, float64, float64[::1], float64[::1], float64[::1], float64[::1], float64, "
+            "float64[::1], float64[::1], float64[::1], float64[::1], float64[:, ::1])",
+            cache=True)
 def _shape(q, dq, qdd, tau_qp, dt, keep, max_position_error, max_velocity_error, q_ref,
            dq_ref, damping, friction, velocity_scale, tau_max, kp, kd, effort_limit, out):
     """Advance the joint reference (as :meth:`JointReference.advance`) and fill the command
@@ -60,10 +66,12 @@ class MotorCommandShaper:
             _NJ, max_position_error_rad=config.reference_position_bound_rad,
             max_velocity_error_rad_s=config.reference_velocity_bound_rad_s,
             leak_time_s=config.stance_leak_time_s)
-        self.tau_max = tau_max
-        self.effort_limit = effort_limit
-        self._damping = np.asarray(config.known_joint_damping)[_JOINT_TYPE]
-        self._friction = np.asarray(config.known_joint_friction)[_JOINT_TYPE]
+        # Float64, C-contiguous, as the compiled shaping takes them (the same arrays when
+        # they already are: the controller's torque limits stay shared).
+        self.tau_max = np.ascontiguousarray(tau_max, dtype=float)
+        self.effort_limit = np.ascontiguousarray(effort_limit, dtype=float)
+        self._damping = np.asarray(config.known_joint_damping, dtype=float)[_JOINT_TYPE]
+        self._friction = np.asarray(config.known_joint_friction, dtype=float)[_JOINT_TYPE]
         self.kp = np.full(_NJ, config.stance_kp)
         self.kd = np.full(_NJ, config.stance_kd)
 
