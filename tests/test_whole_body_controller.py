@@ -267,3 +267,12 @@ def test_torque_limits_changed_after_reset_reach_every_prepared_layout(standing,
     rows = [i for i, group in enumerate(problem.row_groups) if group == "torque limits"]
     np.testing.assert_allclose(problem.upper[rows] + h, 0.5 * c.description.effort_limit)
     np.testing.assert_allclose(problem.lower[rows] + h, -0.5 * c.description.effort_limit)
+
+
+def test_read_only_and_strided_states_are_taken(controller, standing):
+    q, v = standing.copy(), np.zeros(18)
+    q.flags.writeable = v.flags.writeable = False
+    assert controller.step(q, v).ok
+    strided = np.zeros((19, 2))
+    strided[:, 0] = standing
+    assert controller.step(strided[:, 0], np.zeros((18, 3))[:, 1]).ok

@@ -14,13 +14,17 @@ _NJ = 12
 _JOINT_TYPE = np.tile(np.arange(3), len(LEGS))
 
 
+#: The inputs (measured state, QP outputs): any float64 vector, read-only or not.
+_INPUT = numba.types.Array(numba.types.float64, 1, "A", readonly=True)
+_OWN, _F8 = numba.types.float64[::1], numba.types.float64
+
+
 # An explicit signature: compiled (or read from numba's cache) at import rather than at the
-# first tick, which it would stall for milliseconds. The measured state and the QP's
-# outputs may have any layout; the shaper's own arrays are C-contiguous.
-@numba.njit("void(float64[:], float64[:], float64[:], float64[:], float64, float64[::1], "
-            "float64, float64, float64[::1], float64[::1], float64[::1], float64[::1], float64, "
-            "float64[::1], float64[::1], float64[::1], float64[::1], float64[:, ::1])",
-            cache=True)
+# first tick, which it would stall for milliseconds. The shaper's own arrays are
+# C-contiguous.
+@numba.njit(numba.types.void(_INPUT, _INPUT, _INPUT, _INPUT, _F8, _OWN, _F8, _F8, _OWN, _OWN,
+                             _OWN, _OWN, _F8, _OWN, _OWN, _OWN, _OWN,
+                             numba.types.float64[:, ::1]), cache=True)
 def _shape(q, dq, qdd, tau_qp, dt, keep, max_position_error, max_velocity_error, q_ref,
            dq_ref, damping, friction, velocity_scale, tau_max, kp, kd, effort_limit, out):
     """Advance the joint reference (as :meth:`JointReference.advance`) and fill the command

@@ -324,12 +324,17 @@ def reduced_problem(M, h, Jc, contact_drift, contact_desired, loaded, leg_column
     return True
 
 
+#: Any float64 vector, read-only or not (a backend's solution: some return read-only arrays).
+_ANY_VECTOR = numba.types.Array(numba.types.float64, 1, "A", readonly=True)
+_C_VECTOR, _C_MATRIX = numba.types.float64[::1], numba.types.float64[:, ::1]
+
+
 # An explicit signature: compiled (or read from numba's cache) at import rather than at the
 # first tick, which it would stall for milliseconds. The builder's arrays are C-contiguous;
-# the solution ``z`` comes from any backend (any layout).
-@numba.njit("void(float64[:, ::1], float64[::1], float64[:], float64[::1], float64[::1], "
-            "float64[:, ::1], int64, float64[::1], float64[::1], int64[::1], int64, "
-            "float64[:, ::1])", cache=True)
+# the solution ``z`` comes from any backend.
+@numba.njit(numba.types.void(_C_MATRIX, _C_VECTOR, _ANY_VECTOR, _C_VECTOR, _C_VECTOR, _C_MATRIX,
+                             numba.types.int64, _C_VECTOR, _C_VECTOR, numba.types.int64[::1],
+                             numba.types.int64, _C_MATRIX), cache=True)
 def finish(T, t0, z, x, x_prev, A_r, tau_first, tau_offset, tau, loaded, force_start, forces):
     """From the reduced solution ``z``: ``x = T z + t0`` (also kept as ``x_prev``), the
     torques ``A_r[tau rows] z + tau_offset`` and each contact's force (zero without force
