@@ -30,6 +30,10 @@ The parts of a tick:
   output and the loop's hooks (none by default; ``--metrics``' hook in the third run);
 - ``tick``: all of it, and ``around controller``: the tick less ``controller.step``.
 
+Last, a fresh interpreter builds the loop and times, tick by tick, its first ticks standing
+and one goal of each action (:func:`fresh_process_ticks`): their worst ticks show any
+one-off work (compiled code loaded, a QP layout built) that lands inside a control period.
+
 Full mode also runs the 1 kHz episode with the hook ``go2-wbc --metrics`` adds. ``--quick``
 holds the foot 0 s instead of the command line's default and skips that run.
 """
@@ -43,6 +47,7 @@ import json
 import math
 import os
 import platform
+import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -52,7 +57,14 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from actions.messages import HighFiveGoal
+from actions.messages import (
+    FollowJointTrajectoryGoal,
+    HighFiveGoal,
+    JointTrajectory,
+    JointTrajectoryPoint,
+    SitGoal,
+    StandGoal,
+)
 from sim.cli import SETTLE_S, build_parser
 from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop
 from sim.plant import Plant
@@ -92,17 +104,18 @@ def _build(period_s: float, plant: Plant, metrics: bool) -> tuple[ControlLoop, l
 class _Episode:
     """One goal from its sending to its result; ``tick`` runs one control period."""
 
-    def __init__(self, loop: ControlLoop, goal: HighFiveGoal, phase: list[str]):
+    def __init__(self, loop: ControlLoop, goal: Any, phase: list[str], *,
+                 action: str = "high_five"):
         self.loop = loop
         self.phase = phase
         self.feedback = 0
-        self.handle_future = loop.client("high_five").send_goal_async(
+        self.handle_future = loop.client(action).send_goal_async(
             goal, feedback_callback=self._on_feedback)
         self.result_future = None
 
     def _on_feedback(self, message: Any) -> None:
         self.feedback += 1
-        self.phase[0] = message.feedback.phase
+        self.phase[0] = getattr(message.feedback, "phase", "")  # FollowJointTrajectory's has none
 
     def done(self) -> bool:
         """Whether the result has come (or the goal was rejected)."""
@@ -248,6 +261,68 @@ def run_rate(period_s: float, goal: HighFiveGoal, plant: Plant, *, metrics: bool
     }
 
 
+# ---------------------------------------------------------------------------- fresh process
+
+#: A one-leg trajectory for the fresh-process run: FR's three joints to a step in 1 s.
+FRESH_TRAJECTORY = (("FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"), (-0.1, 0.2, -1.6), 1.0)
+
+
+def fresh_process_ticks(goal: HighFiveGoal, plant: Plant) -> dict[str, dict[str, Any]]:
+    """In this process (meant to be a new one): build the loop as ``go2-wbc`` does, then time
+    every tick of its first :data:`SETTLE_S` standing and of one goal of each action
+    (high five, a one-leg FollowJointTrajectory, sit, stand), one after the other.
+
+    The worst tick of a fresh process is where one-off work lands (compiled code loaded
+    from numba's cache, a QP layout or solver structure built, a file read): on a robot it
+    is a stalled control period. Returns per part: ticks, status, max, p99.9 and median [us].
+    """
+    clock = time.perf_counter
+    start = clock()
+    loop = ControlLoop.simulated(pose="standing", plant=plant)
+    parts: dict[str, dict[str, Any]] = {"construction": {"wall_ms": (clock() - start) * 1e3}}
+
+    def timed(until: Callable[[], bool]) -> list[float]:
+        ticks = []
+        while not until():
+            begin = clock()
+            loop.spin_once()
+            ticks.append(clock() - begin)
+        return ticks
+
+    end = loop.robot.time_s + SETTLE_S - 1e-9
+    parts["first ticks (standing)"] = _tick_stats(timed(lambda: loop.robot.time_s >= end),
+                                                  "SUCCEEDED")
+    names, positions, seconds = FRESH_TRAJECTORY
+    trajectory = JointTrajectory(joint_names=list(names), points=[
+        JointTrajectoryPoint(positions=list(positions), time_from_start=seconds)])
+    for action, message in (("high_five", goal),
+                            ("follow_joint_trajectory",
+                             FollowJointTrajectoryGoal(trajectory=trajectory)),
+                            ("sit", SitGoal()), ("stand", StandGoal())):
+        episode = _Episode(loop, message, [""], action=action)
+        parts[action] = _tick_stats(timed(episode.done), episode.status())
+    return parts
+
+
+def _tick_stats(seconds: list[float], status: str) -> dict[str, Any]:
+    values = np.sort(np.asarray(seconds)) * 1e6
+    return {"status": status, "ticks": int(values.size), "max_us": float(values[-1]),
+            "p999_us": float(values[int(0.999 * (values.size - 1))]),
+            "median_us": float(np.median(values))}
+
+
+def run_fresh_process(quick: bool) -> dict[str, dict[str, Any]]:
+    """:func:`fresh_process_ticks` in a new interpreter (this one has loaded everything)."""
+    command = [sys.executable, "-m", "benchmarks.loop_timing", "--fresh-process-child"]
+    if quick:
+        command.append("--quick")
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run(command, cwd=root, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"the fresh-process run failed: {done.stderr[-2000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def machine() -> dict[str, Any]:
     """CPU, cores, load, Python and the versions of the packages that matter here."""
     cpu = platform.processor() or "unknown"
@@ -279,6 +354,8 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
     for period_s, metrics in plan:
         log(f"{1.0 / period_s:g} Hz{' with the metrics hook' if metrics else ''}")
         runs.append(run_rate(period_s, goal, plant, metrics=metrics))
+    log("a fresh process: its first ticks and each action's first goal")
+    fresh = run_fresh_process(quick)
     return {
         "machine": machine(),
         "mode": "quick" if quick else "full",
@@ -289,6 +366,7 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
                                      "hold_seconds": defaults["hold_seconds"],
                                      "control_rate_hz": defaults["control_rate_hz"]}},
         "runs": runs,
+        "fresh_process": fresh,
         "notes": [
             ("Real-time factor: sim time over wall time from the goal's sending to its result, "
              "ControlLoop.spin_once as go2-wbc runs it; cpu share: process CPU time over that "
@@ -297,6 +375,10 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
              "with perf_counter around each (see the module docstring); physics.mj_step "
              "times the mujoco.mj_step calls of the tick; 'around controller' is the tick "
              "less controller.step. Medians do not add up: each is its own part's."),
+            ("Fresh process: a new interpreter builds the loop and runs, at 1 kHz, its first "
+             "ticks standing, then one goal of each action in turn (the high five above, FR's "
+             "joints to a step in 1 s, sit, stand); where one-off work lands in a tick, its "
+             "max shows it."),
         ],
     }
 
@@ -325,6 +407,14 @@ def format_report(report: dict[str, Any]) -> str:
         for part, s in r["per_tick_us"].items():
             name = f"  {part.split('.', 1)[1]}" if "." in part else part
             lines.append(f"{name:<26}{s['median']:>8.1f}{s['p99']:>8.1f}{s['mean']:>8.1f}")
+    fresh = report["fresh_process"]
+    lines += ["", (f"Fresh process (loop built in {fresh['construction']['wall_ms']:.0f} ms): "
+                   "worst ticks [us]"),
+              f"{'part':<26}{'status':>10}{'ticks':>7}{'median':>8}{'p99.9':>8}{'max':>8}"]
+    for part, s in fresh.items():
+        if part != "construction":
+            lines.append(f"{part:<26}{s['status']:>10}{s['ticks']:>7}{s['median_us']:>8.0f}"
+                         f"{s['p999_us']:>8.0f}{s['max_us']:>8.0f}")
     return "\n".join(lines + [""] + report["notes"])
 
 
@@ -347,7 +437,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help=f"hold the foot {QUICK_HOLD_S} s and skip the metrics-hook run")
     parser.add_argument("--json", type=Path, default=Path("out/loop_timing.json"),
                         help="where to write the report (default: out/loop_timing.json)")
+    parser.add_argument("--fresh-process-child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.fresh_process_child:  # the fresh-process run's child: one JSON line
+        defaults = cli_defaults()
+        hold = QUICK_HOLD_S if args.quick else defaults["hold_seconds"]
+        goal = HighFiveGoal(target_height=defaults["target_height"], hold_seconds=hold)
+        print(json.dumps(fresh_process_ticks(goal, defaults["plant"])))
+        return 0
     started = time.perf_counter()
     report = run(quick=args.quick, log=lambda msg: print(
         f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))

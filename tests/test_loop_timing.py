@@ -63,3 +63,15 @@ def test_the_printed_report_has_both_tables(quick_run):
     text = loop_timing.format_report(quick_run)
     assert "Whole episode (ControlLoop.spin_once)" in text
     assert "Per tick [us], 500 Hz" in text and "  mj_step" in text
+
+
+def test_a_fresh_process_times_its_first_ticks_and_each_actions_first_goal(quick_run):
+    fresh = quick_run["fresh_process"]
+    assert list(fresh) == ["construction", "first ticks (standing)", "high_five",
+                           "follow_joint_trajectory", "sit", "stand"]
+    assert 0.0 < fresh["construction"]["wall_ms"] < math.inf
+    assert fresh["first ticks (standing)"]["ticks"] == 300  # SETTLE_S at 1 kHz
+    for part, stats in list(fresh.items())[1:]:
+        assert stats["status"] == "SUCCEEDED", part
+        assert stats["ticks"] > 0, part
+        assert 0.0 < stats["median_us"] <= stats["p999_us"] <= stats["max_us"] < math.inf, part
