@@ -189,19 +189,15 @@ class Task:
         any other task runs :meth:`compute` and the PD law in NumPy.
         """
         call = self._call
-        if call is not None and call[0] is kinematics:
-            call[1]()
-            return
-        compiled = self._compiled_call(kinematics)
-        if compiled is None:
-            self.compute(kinematics)
-            desired = self.desired_acceleration
-            desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
-            desired += self.reference[2]
-            return
-        bound = bind_compiled(compiled[0], *compiled[1])
-        self._call = (kinematics, bound)
-        bound()
+        if call is None or call[0] is not kinematics:
+            if not self._bind(kinematics):
+                self.compute(kinematics)
+                desired = self.desired_acceleration
+                desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
+                desired += self.reference[2]
+                return
+            call = self._call
+        call[1]()
 
     def prepare(self, kinematics: RobotKinematics) -> None:
         """Bind the compiled kernel to this task's arrays now, which loads its compiled code
@@ -209,14 +205,19 @@ class Task:
         tick that runs the task. Nothing for a task written in Python, or one that cannot
         run yet (no target): that one binds on its first tick."""
         call = self._call
-        if call is not None and call[0] is kinematics:
-            return
-        try:
-            compiled = self._compiled_call(kinematics)
-        except ConfigurationError:  # no target yet
-            return
-        if compiled is not None:
-            self._call = (kinematics, bind_compiled(compiled[0], *compiled[1]))
+        if call is None or call[0] is not kinematics:
+            try:
+                self._bind(kinematics)
+            except ConfigurationError:  # no target yet
+                pass
+
+    def _bind(self, kinematics: RobotKinematics) -> bool:
+        """Bind the compiled kernel (``_call``); False for a task written in Python."""
+        compiled = self._compiled_call(kinematics)
+        if compiled is None:
+            return False
+        self._call = (kinematics, bind_compiled(compiled[0], *compiled[1]))
+        return True
 
     def _compiled_call(self, kinematics: RobotKinematics) -> tuple | None:
         """``(kernel, arguments)`` that fill this task's arrays, or ``None`` (use compute).

@@ -267,14 +267,18 @@ class ProblemBuilder:
 
     def set_loaded_contacts(self, contacts: Sequence[str]) -> None:
         """The contacts that carry load (have force variables and stance rows)."""
+        loaded = self._ordered(contacts)
+        if loaded != self._loaded:
+            self._loaded = loaded
+            self._current = None
+
+    def _ordered(self, contacts: Sequence[str]) -> tuple[str, ...]:
+        """``contacts`` in the builder's order, each checked to be one of its contacts."""
         unknown = sorted(set(contacts) - set(self.contacts))
         if unknown:
             raise ConfigurationError(f"contacts: unknown contact(s) {unknown}; valid contacts: "
                                      f"{list(self.contacts)}")
-        loaded = tuple(c for c in self.contacts if c in set(contacts))
-        if loaded != self._loaded:
-            self._loaded = loaded
-            self._current = None
+        return tuple(c for c in self.contacts if c in set(contacts))
 
     @property
     def layout(self) -> VariableLayout:
@@ -352,11 +356,7 @@ class ProblemBuilder:
         self.contact_task.prepare(kin)
         problems = []
         for contacts in loaded_sets:
-            unknown = sorted(set(contacts) - set(self.contacts))
-            if unknown:
-                raise ConfigurationError(f"contacts: unknown contact(s) {unknown}; valid "
-                                         f"contacts: {list(self.contacts)}")
-            entry = self._entry(tuple(c for c in self.contacts if c in set(contacts)))
+            entry = self._entry(self._ordered(contacts))
             self._bind_calls(entry)
             if entry.reduced is not None:
                 self._bind_reduction(entry)

@@ -199,8 +199,9 @@ class DaqpBackend(QpBackend):
         """Args:
             primal_tol: Primal feasibility tolerance (constraint violation it accepts).
             iter_limit: Active-set iteration limit.
-            hot_start: Start each solve from the previous solve's active set (DAQP's
-                "active" sense flag), while the problem's structure is unchanged.
+            hot_start: Start each solve from the active set of the last solve of the same
+                problem (DAQP's "active" sense flag; each QP layout keeps its own), while
+                its structure is unchanged.
             direct: Call DAQP's C function directly where this DAQP release allows it
                 (``False``: always through ``daqp.solve``).
         """
