@@ -14,7 +14,7 @@ import argparse
 import dataclasses
 import math
 import sys
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import yaml
 
@@ -35,8 +35,12 @@ from sim.cli import (
     SETTLE_S,
     _plant_line,
     _plant_options,
+    startup_objects_frozen,
 )
 from wbc.errors import WbcError
+
+if TYPE_CHECKING:
+    from sim.control_loop import ControlLoop
 
 #: Significant digits of the numbers in a feedback line.
 FEEDBACK_DIGITS = 6
@@ -220,6 +224,11 @@ class SendGoal:
         loop = self.loop = ControlLoop.simulated(
             plant=args.plant_model, control_period_s=args.control_period_s,
             physics_timestep_s=args.physics_dt)
+        with startup_objects_frozen():
+            return self._run(loop)
+
+    def _run(self, loop: ControlLoop) -> int:
+        args = self.args
         loop.spin_for(SETTLE_S)  # the plant starts without contact forces: let it settle
         client = ActionClient(loop.runner, self.action_type, self.action_name)
         self.say("Waiting for an action server to become available...")

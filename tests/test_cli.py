@@ -485,3 +485,19 @@ def test_plant_parameters_are_parsed_by_name():
                                 ("payload_offset_m", (0.1, 0.0, -0.02))]
     assert isinstance(args.plant_param[0][1], int)  # MuJoCo's condim is an integer
     assert (args.control_rate, args.physics_dt) == (2000.0, 0.0005)
+
+
+def test_start_up_objects_are_frozen_while_the_loop_runs_and_released_after(monkeypatch):
+    import gc
+
+    from sim.control_loop import ControlLoop
+
+    seen = []
+    spin_once = ControlLoop.spin_once
+    monkeypatch.setattr(ControlLoop, "spin_once",
+                        lambda self: (seen.append(gc.get_freeze_count()), spin_once(self))[1])
+    before = gc.get_freeze_count()
+    code, _ = run(["stand", "--duration", "0.5"])
+    assert code == EXIT_SUCCEEDED
+    assert min(seen) > before + 100_000  # the models, MuJoCo, numba's code: out of every scan
+    assert gc.get_freeze_count() == before  # given back when the run ends
