@@ -276,3 +276,14 @@ def test_read_only_and_strided_states_are_taken(controller, standing):
     strided = np.zeros((19, 2))
     strided[:, 0] = standing
     assert controller.step(strided[:, 0], np.zeros((18, 3))[:, 1]).ok
+
+
+def test_torque_limits_changed_after_reset_also_bound_the_feed_forward(standing):
+    c = WholeBodyController(known_joint_friction=(5.0, 5.0, 5.0))  # pushes tau_ff up
+    c.reset(standing)
+    c.tau_max = np.full(12, 4.0)
+    v = np.zeros(18)
+    v[6:] = 2.0  # moving joints: the friction term is about 5 N m on each
+    out = c.step(standing, v)
+    assert np.all(np.abs(out.tau_ff) <= 4.0 + 1e-12)
+    np.testing.assert_array_equal(c.motor.tau_max, np.full(12, 4.0))

@@ -182,7 +182,8 @@ class WholeBodyController(ContactModes):
 
     @tau_max.setter
     def tau_max(self, value: np.ndarray) -> None:
-        self.torque_limits.tau_max = value
+        self.torque_limits.tau_max = value  # validated; the QP's rows read it in place
+        self.motor.tau_max[:] = self.torque_limits.tau_max  # and the feed-forward's clip
 
     # ------------------------------------------------------------------ composition
 
