@@ -70,8 +70,8 @@ class MotorCommandShaper:
             _NJ, max_position_error_rad=config.reference_position_bound_rad,
             max_velocity_error_rad_s=config.reference_velocity_bound_rad_s,
             leak_time_s=config.stance_leak_time_s)
-        # Float64, C-contiguous, as the compiled shaping takes them (the same arrays when
-        # they already are: the controller's torque limits stay shared).
+        # Float64, C-contiguous, as the compiled shaping takes them: the caller's own arrays
+        # when they already are (a caller that shares them with its QP keeps sharing).
         self.tau_max = np.ascontiguousarray(tau_max, dtype=float)
         self.effort_limit = np.ascontiguousarray(effort_limit, dtype=float)
         self._damping = np.asarray(config.known_joint_damping, dtype=float)[_JOINT_TYPE]
