@@ -20,8 +20,16 @@ _GRAVITY = 9.81
 STANDING_HEIGHT_M = 0.25
 
 
+def tilt_deg(q: np.ndarray) -> float:
+    """Angle [deg] between the base's vertical axis and the world's, for a configuration
+    ``q`` (Pinocchio convention: quaternion ``q[3:7]`` as x, y, z, w)."""
+    x, y = float(q[3]), float(q[4])
+    return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
+
+
 class RobotContext:
-    """The controller plus the latest measured state, updated by the control loop each tick."""
+    """The controller plus the latest state it was given (estimated, on a GO2), updated by
+    the control loop each tick."""
 
     def __init__(self, controller: BalanceController):
         self.controller = controller
@@ -56,9 +64,8 @@ class RobotContext:
         self.now_s, self.q, self.v = now_s, q, v
 
     def tilt_deg(self) -> float:
-        """Angle [deg] between the base's vertical axis and the world's."""
-        x, y = float(self.q[3]), float(self.q[4])
-        return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
+        """Angle [deg] between the base's vertical axis and the world's (:func:`tilt_deg`)."""
+        return tilt_deg(self.q)
 
     def com_margin_m(self) -> float:
         """Centre of mass's distance [m] inside the support polygon of the loaded feet."""

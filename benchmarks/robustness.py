@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from actions import GoalStatus, HighFiveGoal
-from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG
+from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_deg
 from benchmarks.qp_timing import machine
 from sim.cli import MetricsHook
 from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop, TickHook
@@ -47,6 +47,8 @@ from sim.disturbances import NoisyDelayedRobot, Push, PushSchedule
 from sim.episode_metrics import EpisodeSummary
 from sim.mujoco_robot import MujocoRobot
 from sim.plant import Plant
+from sim.sensor_faults import FaultyRobot, SensorFault
+from sim.sensors import DEFAULT_SENSORS, SensorModel
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.description import LEGS
@@ -85,10 +87,22 @@ class PlantCase:
     name: str = "nominal"
     plant: Plant = field(default_factory=Plant)
     delay_ticks: int = 0
+    #: Extra joint noise on top of the sensor model's [rad], [rad/s].
     position_noise_rad: float = 0.0
     velocity_noise_rad_s: float = 0.0
     #: Control period [s] (1 ms: 1 kHz; 2 ms: 500 Hz).
     control_period_s: float = 1e-3
+    #: What the robot measures (a :class:`sim.sensors.SensorModel` or a preset's name).
+    sensors: SensorModel | str = DEFAULT_SENSORS
+    #: Where the controller's state comes from: ``estimate`` (default) or ``truth``.
+    state: str = "estimate"
+    #: Sensor faults, their times counted from the goal's start [s].
+    sensor_faults: tuple[SensorFault, ...] = ()
+
+    def sensor_model(self) -> SensorModel:
+        """The sensor model (the preset resolved)."""
+        return (SensorModel.preset(self.sensors) if isinstance(self.sensors, str)
+                else self.sensors)
 
 
 PLANT_CASES = (
@@ -203,27 +217,42 @@ class _Extremes:
         self.max_tilt_deg = 0.0
 
     def __call__(self, loop: ControlLoop, out: Any) -> None:
-        self.min_height_m = min(self.min_height_m, float(loop.context.q[2]))
-        self.max_tilt_deg = max(self.max_tilt_deg, loop.context.tilt_deg())
+        q, _ = loop.true_state()
+        self.min_height_m = min(self.min_height_m, float(q[2]))
+        self.max_tilt_deg = max(self.max_tilt_deg, tilt_deg(q))
 
 
 def standing_on_four_feet(loop: ControlLoop) -> bool:
-    """Four feet in stance and loaded in MuJoCo, base at standing height and level."""
+    """Four feet in stance in the controller and loaded in MuJoCo, the base at standing
+    height and level within 5 deg (the simulator's true state)."""
+    q, _ = loop.true_state()
     forces = loop.sim.foot_contact_forces()
-    return bool(loop.context.is_standing()) and all(forces[leg][2] > LOADED_N for leg in LEGS)
+    return (len(loop.controller.stance_legs) == len(LEGS) and q[2] > STANDING_HEIGHT_M
+            and tilt_deg(q) < 5.0 and all(forces[leg][2] > LOADED_N for leg in LEGS))
 
 
 def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
-              controller: BalanceController | None = None) -> ControlLoop:
-    """A control loop on a fresh standing MuJoCo GO2 built with ``case``'s plant and sensors."""
+              controller: BalanceController | None = None,
+              faults_from_s: float = SETTLE_S) -> ControlLoop:
+    """A control loop on a fresh standing MuJoCo GO2 built with ``case``'s plant and sensors.
+
+    ``seed`` seeds the sensors' noise and biases; the case's sensor faults start
+    ``faults_from_s`` [s] later than their own times (a goal is sent at :data:`SETTLE_S`).
+    """
     period = case.control_period_s
     sim = Go2Simulator(plant=case.plant, timestep_s=min(PHYSICS_TIMESTEP_S, period))
-    robot: Any = MujocoRobot(sim, control_period_s=period)
+    model = case.sensor_model()
+    robot: Any = MujocoRobot(sim, control_period_s=period, sensors=model, sensor_seed=seed)
     if case.delay_ticks or case.position_noise_rad or case.velocity_noise_rad_s:
         robot = NoisyDelayedRobot(robot, position_noise_rad=case.position_noise_rad,
                                   velocity_noise_rad_s=case.velocity_noise_rad_s,
                                   delay_ticks=case.delay_ticks, seed=seed)
-    loop = ControlLoop(robot, controller or WholeBodyController(control_period_s=period))
+    if case.sensor_faults:
+        robot = FaultyRobot(robot, [replace(f, at_s=f.at_s + faults_from_s)
+                                    for f in case.sensor_faults],
+                            foot_full_scale=model.foot_force_full_scale)
+    loop = ControlLoop(robot, controller or WholeBodyController(control_period_s=period),
+                       state=case.state)
     loop.sim = sim
     return loop
 
@@ -267,10 +296,11 @@ def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
         feedback_callback=on_feedback)
     loop.spin_for(after_s)
     summary = None if metrics is None else metrics.metrics.summary(time.perf_counter() - wall)
+    final, _ = loop.true_state()
     return Episode(
         status=result.status, message=result.result.message,
-        min_height_m=extremes.min_height_m, final_height_m=float(loop.context.q[2]),
-        max_tilt_deg=extremes.max_tilt_deg, final_tilt_deg=loop.context.tilt_deg(),
+        min_height_m=extremes.min_height_m, final_height_m=float(final[2]),
+        max_tilt_deg=extremes.max_tilt_deg, final_tilt_deg=tilt_deg(final),
         standing=standing_on_four_feet(loop), summary=summary, start_s=start, phases=phases,
         loop=loop)
 

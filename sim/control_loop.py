@@ -1,4 +1,4 @@
-"""The control loop (1 kHz by default) that wires a plant, the whole-body controller and the action runner."""
+"""The control loop (1 kHz by default): the robot's sensors, the state estimator, the actions, the controller."""
 
 from __future__ import annotations
 
@@ -13,12 +13,15 @@ from actions.robot_context import RobotContext
 from actions.robot_interface import MappedRobot, RobotInterface
 from sim.mujoco_robot import MujocoRobot
 from sim.plant import DEFAULT_PLANT, Plant
+from sim.sensors import DEFAULT_SENSORS, SensorModel
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput
-from wbc.description import JOINT_NAMES, Go2Description
+from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.motor_command import within_effort_limits
+from wbc.state_estimator import StateEstimator
+from wbc.validation import check_name
 from wbc.whole_body_controller import WholeBodyController
 
 TickHook = Callable[["ControlLoop", ControlOutput], None]
@@ -26,12 +29,26 @@ TickHook = Callable[["ControlLoop", ControlOutput], None]
 PHYSICS_TIMESTEP_S = 1e-3
 
 
+#: Where the controller's state comes from: estimated from the robot's sensors (the
+#: default, as on a real GO2), or the simulator's exact state.
+STATE_SOURCES = ("estimate", "truth")
+
+
 class ControlLoop:
-    """Reads the robot, ticks the actions, runs the controller, writes the motor command.
+    """Reads the robot, estimates its state, ticks the actions, runs the controller, writes
+    the motor command.
 
     ``spin_once()`` is one control period, in simulated time; it is registered with the
     runner so that ``ActionClient.send_goal_and_wait`` drives the loop when called from
     the same thread (as ``rclpy.spin_until_future_complete`` does).
+
+    The controller sees what a GO2 measures: each tick the robot's sensor record goes
+    through a :class:`wbc.StateEstimator` (IMU, joint encoders, foot contact, and the
+    controller's contact schedule) to the controller's ``(q, v)``. When the estimator has had
+    no trustworthy sample for longer than its ``trust_timeout_s``, the loop sends the
+    controller's safe command with the reason instead (a running goal then ends ABORTED),
+    and resumes when samples return. ``state="truth"`` hands the controller the simulator's
+    exact state instead (a simulator only; for comparisons).
 
     Example:
         >>> loop = ControlLoop.simulated()
@@ -41,19 +58,43 @@ class ControlLoop:
 
     def __init__(self, robot: RobotInterface, controller: BalanceController, *,
                  busy_policy: BusyPolicy = BusyPolicy.REJECT,
-                 aliases: dict[str, str] | None = None):
+                 aliases: dict[str, str] | None = None, state: str = "estimate",
+                 estimator: StateEstimator | None = None):
         """Args:
             robot: The robot in its own joint order (simulated or real).
             controller: The balance controller (reset to the robot's state here).
             busy_policy: What a goal for a busy robot gets.
             aliases: The robot's joint names mapped to the description's, where they differ.
+            state: ``estimate`` (the default: the state estimator on the robot's sensors) or
+                ``truth`` (the robot's exact state: simulators only).
+            estimator: The state estimator (by default one for the controller's control
+                period); started here on the robot's first sample, on four loaded feet.
+
+        Raises:
+            UnknownNameError: An unknown ``state``.
+            ConfigurationError: ``truth`` from a robot that does not know its exact state,
+                or a first sample the estimator cannot start from (the field named).
         """
+        check_name("state source", state, STATE_SOURCES)
         self.robot = MappedRobot(robot, aliases=aliases)
         self.controller = controller
+        self.state_source = state
         self.context = RobotContext(controller)
         self.runner: ActionRunner = make_go2_runner(self.context, busy_policy=busy_policy)
         self.runner.set_spinner(self.spin_once)
-        q, v = self.robot.read_state()
+        self._bounds = np.zeros(len(LEGS))
+        self.estimator: StateEstimator | None = None
+        if state == "truth":
+            q, v = self.robot.read_state()
+        else:
+            period = getattr(getattr(controller, "config", None), "control_period_s", 1e-3)
+            self.estimator = estimator or StateEstimator(control_period_s=period)
+            record = self.robot.read_sensors()
+            if record is None:
+                raise ConfigurationError(
+                    "robot: no sensor sample to start the state estimator from")
+            estimate = self.estimator.reset(record)
+            q, v = estimate.q.copy(), estimate.v.copy()
         controller.reset(q, v)
         self._effort_limit = Go2Description.default().effort_limit
         self.context.observe(self.robot.time_s, q, v)
@@ -65,7 +106,10 @@ class ControlLoop:
                   plant: Plant | str = DEFAULT_PLANT, control_period_s: float = 1e-3,
                   physics_timestep_s: float | None = None,
                   busy_policy: BusyPolicy = BusyPolicy.REJECT,
-                  controller: BalanceController | None = None) -> ControlLoop:
+                  controller: BalanceController | None = None,
+                  sensors: SensorModel | str = DEFAULT_SENSORS, sensor_seed: int = 0,
+                  state: str = "estimate", estimator: StateEstimator | None = None
+                  ) -> ControlLoop:
         """A loop on a fresh MuJoCo GO2 in ``pose``, with the default whole-body controller.
 
         Args:
@@ -80,16 +124,24 @@ class ControlLoop:
             busy_policy: What a goal for a busy robot gets.
             controller: The controller; by default a :class:`WholeBodyController` with this
                 control period. A given one must have the same ``control_period_s``.
+            sensors: What the robot measures: a :class:`sim.sensors.SensorModel` or a preset
+                (default ``go2``: a GO2's noise and biases; ``exact``: no noise).
+            sensor_seed: Seed of the sensors' noise and biases.
+            state: ``estimate`` (default) or ``truth`` (see the class docstring).
+            estimator: The state estimator (a default one when ``None``).
 
         Raises:
             ConfigurationError: A control period that is not a whole number of physics steps,
                 or a controller configured for another period.
+            UnknownNameError: An unknown sensor preset or state source.
         """
         if physics_timestep_s is None:
             physics_timestep_s = min(PHYSICS_TIMESTEP_S, control_period_s)
+        check_name("state source", state, STATE_SOURCES)
         sim = Go2Simulator(actuator_order=actuator_order, plant=plant,
                            timestep_s=physics_timestep_s)
-        robot = MujocoRobot(sim, control_period_s=control_period_s)
+        robot = MujocoRobot(sim, control_period_s=control_period_s, sensors=sensors,
+                            sensor_seed=sensor_seed)
         if controller is None:
             controller = WholeBodyController(control_period_s=control_period_s)
         period = getattr(getattr(controller, "config", None), "control_period_s", None)
@@ -98,7 +150,9 @@ class ControlLoop:
                 f"control_period_s: the controller is configured for {period:g} s, the loop "
                 f"for {control_period_s:g} s; give both the same period")
         sim.reset(pose)
-        loop = cls(robot, controller, busy_policy=busy_policy)
+        robot.sensors.reset()
+        loop = cls(robot, controller, busy_policy=busy_policy, state=state,
+                   estimator=estimator)
         loop.sim = sim
         return loop
 
@@ -106,13 +160,38 @@ class ControlLoop:
         """An action client for ``action_name`` on this loop's runner."""
         return ActionClient(self.runner, action_name)
 
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The ``(q, v)`` the controller gets this tick (new arrays): the estimate from this
+        period's sensor sample and the controller's contact schedule, or the exact state."""
+        estimator = self.estimator
+        if estimator is None:
+            return self.robot.read_state()
+        self.controller.normal_force_bounds(self._bounds)
+        estimate = estimator.update(self.robot.read_sensors(), self._bounds)
+        return estimate.q.copy(), estimate.v.copy()
+
+    def true_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's exact ``(q, v)``, for metrics and tests (simulated robots only)."""
+        return self.robot.read_state()
+
+    def command(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
+        """The controller's tick, or its safe command while the state is not trustworthy."""
+        estimator = self.estimator
+        if estimator is not None and not estimator.estimate.usable:
+            estimate = estimator.estimate
+            return self.controller.safe_command(v, (
+                f"state estimate: no trustworthy sensor sample for "
+                f"{estimate.untrusted_s * 1e3:.0f} ms (limit "
+                f"{estimator.config.trust_timeout_s * 1e3:g} ms): {estimate.faults}"))
+        return self.controller.step(q, v)
+
     def spin_once(self) -> ControlOutput:
         """One control period."""
         now = self.robot.time_s
-        q, v = self.robot.read_state()
+        q, v = self.read_state()
         self.context.observe(now, q, v)
         self.runner.tick(now)
-        out = self.guard(self.controller.step(q, v), v)
+        out = self.guard(self.command(q, v), v)
         self.context.record_output(out)
         self.last_output = out
         self.robot.write_command(out)

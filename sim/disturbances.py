@@ -15,14 +15,19 @@ import numpy as np
 from actions.robot_interface import RobotInterface
 from wbc.errors import ConfigurationError
 from wbc.motor_command import MotorCommand
+from wbc.sensor_record import SensorRecord
 from wbc.validation import as_float
 
 
 @dataclass
 class NoisyDelayedRobot:
-    """A robot whose joint sensors are noisy and whose commands arrive late.
+    """A robot whose joint sensors are noisier and whose commands arrive late.
 
-    Wraps a :class:`~actions.robot_interface.RobotInterface` (same joint order).
+    Wraps a :class:`~actions.robot_interface.RobotInterface` (same orders): Gaussian noise is
+    added to the joint positions and velocities of its sensor records (and of its exact
+    state, for ``--state truth``), and each command is applied ``delay_ticks`` control
+    periods after it was sent (a transport delay: legged_control's simulation of a Unitree
+    robot applies commands 9 ms late).
 
     Attributes:
         robot: The robot.
@@ -56,18 +61,32 @@ class NoisyDelayedRobot:
         return self.robot.joint_names
 
     @property
+    def leg_names(self) -> tuple[str, ...]:
+        """The robot's leg order."""
+        return self.robot.leg_names
+
+    @property
     def time_s(self) -> float:
         """The robot's clock [s]."""
         return self.robot.time_s
 
-    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """The robot's state with Gaussian noise on the joint positions and velocities."""
-        q, v = self.robot.read_state()
-        n = len(q) - 7
+    def _add_noise(self, positions: np.ndarray, velocities: np.ndarray) -> None:
         if self.position_noise_rad:
-            q[7:] += self._rng.normal(0.0, self.position_noise_rad, n)
+            positions += self._rng.normal(0.0, self.position_noise_rad, len(positions))
         if self.velocity_noise_rad_s:
-            v[6:] += self._rng.normal(0.0, self.velocity_noise_rad_s, n)
+            velocities += self._rng.normal(0.0, self.velocity_noise_rad_s, len(velocities))
+
+    def read_sensors(self) -> SensorRecord | None:
+        """The robot's sensor record with more noise on the joint positions and velocities."""
+        record = self.robot.read_sensors()
+        if record is not None:
+            self._add_noise(record.q, record.dq)
+        return record
+
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's exact state with the same noise on the joints."""
+        q, v = self.robot.read_state()
+        self._add_noise(q[7:], v[6:])
         return q, v
 
     def write_command(self, command: MotorCommand) -> None:

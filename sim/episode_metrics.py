@@ -62,6 +62,126 @@ def _torques(tau, previous, limit, has_previous, stats):
         previous[i] = tau[i]
 
 
+#: What :class:`EstimateErrors` accumulates (``stats``'s entries).
+_N, _V2, _VMAX, _H2, _HMAX, _ROLL, _PITCH, _DRIFT, _DRIFT_MAX, _YAW, _YAW_MAX, _H_FIRST, _H_LAST = (
+    range(13))
+
+
+@numba.njit(cache=True)
+def _gravity_angles(quat):  # pragma: no cover - compiled
+    """Roll and pitch [rad] of the base from a Pinocchio quaternion (x, y, z, w): the angles
+    of the world's "up" seen in the base frame (yaw does not enter)."""
+    x, y, z, w = quat[0], quat[1], quat[2], quat[3]
+    gx = 2.0 * (x * z - y * w)
+    gy = 2.0 * (y * z + x * w)
+    gz = 1.0 - 2.0 * (x * x + y * y)
+    return math.atan2(gy, gz), math.atan2(-gx, math.sqrt(gy * gy + gz * gz))
+
+
+@numba.njit(cache=True)
+def _yaw(quat):  # pragma: no cover - compiled
+    x, y, z, w = quat[0], quat[1], quat[2], quat[3]
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+@numba.njit(numba.void(_F64[::1], _F64[::1], _F64[::1], _F64[::1], _F64[::1], _F64[::1]),
+            cache=True)
+def _estimate_errors(q_est, v_est, q_true, v_true, alignment, stats):  # pragma: no cover
+    """Accumulate one tick's estimation errors into ``stats`` (see :class:`EstimateErrors`).
+
+    ``alignment`` is ``(cos, sin, tx, ty, tz, yaw offset)``: the estimator's world frame
+    carried into the simulator's (a yaw and a translation fixed when measuring began).
+    """
+    c, s, tx, ty = alignment[0], alignment[1], alignment[2], alignment[3]
+    v2 = 0.0
+    for k in range(3):  # base-frame linear velocity: no frame alignment needed
+        v2 += (v_est[k] - v_true[k]) ** 2
+    stats[_N] += 1.0
+    stats[_V2] += v2
+    stats[_VMAX] = max(stats[_VMAX], math.sqrt(v2))
+    height = q_est[2] - q_true[2]
+    stats[_H2] += height * height
+    stats[_HMAX] = max(stats[_HMAX], abs(height))
+    if stats[_N] == 1.0:
+        stats[_H_FIRST] = height
+    stats[_H_LAST] = height
+    roll_est, pitch_est = _gravity_angles(q_est[3:7])
+    roll_true, pitch_true = _gravity_angles(q_true[3:7])
+    stats[_ROLL] = max(stats[_ROLL], abs(roll_est - roll_true))
+    stats[_PITCH] = max(stats[_PITCH], abs(pitch_est - pitch_true))
+    dx = c * q_est[0] - s * q_est[1] + tx - q_true[0]
+    dy = s * q_est[0] + c * q_est[1] + ty - q_true[1]
+    drift = math.sqrt(dx * dx + dy * dy)
+    stats[_DRIFT] = drift
+    stats[_DRIFT_MAX] = max(stats[_DRIFT_MAX], drift)
+    yaw = _yaw(q_est[3:7]) + alignment[5] - _yaw(q_true[3:7])
+    yaw = (yaw + math.pi) % (2.0 * math.pi) - math.pi
+    stats[_YAW] = yaw
+    stats[_YAW_MAX] = max(stats[_YAW_MAX], abs(yaw))
+
+
+class FrameAlignment:
+    """The estimator's world frame carried into the simulator's, fixed at one instant.
+
+    A state estimator's world has its own origin and heading (this library's starts with the
+    base's heading at zero, and its yaw drifts as a magnetometer-free IMU's does). Targets
+    the controller was given in it, and its positions, are compared with the simulator's
+    through the yaw and translation that map the estimated base onto the true one at that
+    instant (goal start, for a goal's metrics).
+
+    Args:
+        q_estimate: The estimated configuration (19,) at that instant.
+        q_true: The true configuration (19,) at the same instant.
+    """
+
+    def __init__(self, q_estimate: np.ndarray, q_true: np.ndarray):
+        yaw = _yaw(np.ascontiguousarray(q_true[3:7])) - _yaw(
+            np.ascontiguousarray(q_estimate[3:7]))
+        c, s = math.cos(yaw), math.sin(yaw)
+        self.rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        self.translation = np.asarray(q_true[:3], dtype=float) - self.rotation @ q_estimate[:3]
+        #: ``(cos, sin, tx, ty, tz, yaw)`` for the compiled error kernel.
+        self.vector = np.array([c, s, *self.translation, yaw])
+
+    def point_to_true(self, point: np.ndarray) -> np.ndarray:
+        """A point [m] of the estimator's world, in the simulator's."""
+        return self.rotation @ point + self.translation
+
+
+class EstimateErrors:
+    """The state estimate against the simulator's truth, tick by tick.
+
+    Args:
+        alignment: The frame alignment fixed when measuring began.
+    """
+
+    def __init__(self, alignment: FrameAlignment):
+        self.alignment = alignment
+        self.stats = np.zeros(13)
+
+    def record(self, q_estimate: np.ndarray, v_estimate: np.ndarray, q_true: np.ndarray,
+               v_true: np.ndarray) -> None:
+        """One tick's estimate and the truth at the same instant (Pinocchio conventions)."""
+        _estimate_errors(q_estimate, v_estimate, q_true, v_true, self.alignment.vector,
+                         self.stats)
+
+    def summary(self) -> dict[str, float]:
+        """Velocity error RMS and max [m/s], height error RMS, max and drift [mm], roll and
+        pitch error max [deg], horizontal drift at the end and max [mm], yaw drift at the end
+        and max [deg]."""
+        st = self.stats
+        n = max(st[_N], 1.0)
+        return {
+            "velocity_rms_m_s": math.sqrt(st[_V2] / n), "velocity_max_m_s": st[_VMAX],
+            "height_rms_mm": 1e3 * math.sqrt(st[_H2] / n), "height_max_mm": 1e3 * st[_HMAX],
+            "height_drift_mm": 1e3 * abs(st[_H_LAST] - st[_H_FIRST]),
+            "roll_max_deg": math.degrees(st[_ROLL]), "pitch_max_deg": math.degrees(st[_PITCH]),
+            "horizontal_drift_mm": 1e3 * st[_DRIFT],
+            "horizontal_drift_max_mm": 1e3 * st[_DRIFT_MAX],
+            "yaw_drift_deg": math.degrees(st[_YAW]), "yaw_drift_max_deg": math.degrees(st[_YAW_MAX]),
+        }
+
+
 @dataclass
 class EpisodeSummary:
     """What an episode achieved. Lengths [mm], forces [N], angles [deg], times [us]."""
@@ -87,6 +207,20 @@ class EpisodeSummary:
     tick_max_us: float
     real_time_factor: float
     fell: bool
+    #: The state estimate against the truth (all 0 when the controller read the truth):
+    #: base linear velocity error [m/s], height error [mm], roll and pitch error [deg],
+    #: horizontal drift [mm] and yaw drift [deg] since measuring began.
+    estimate_velocity_rms_m_s: float = 0.0
+    estimate_velocity_max_m_s: float = 0.0
+    estimate_height_rms_mm: float = 0.0
+    estimate_height_max_mm: float = 0.0
+    estimate_height_drift_mm: float = 0.0
+    estimate_roll_max_deg: float = 0.0
+    estimate_pitch_max_deg: float = 0.0
+    estimate_horizontal_drift_mm: float = 0.0
+    estimate_horizontal_drift_max_mm: float = 0.0
+    estimate_yaw_drift_deg: float = 0.0
+    estimate_yaw_drift_max_deg: float = 0.0
 
     def as_dict(self) -> dict[str, float | int | bool]:
         """Plain values, JSON-ready."""
@@ -131,6 +265,9 @@ class EpisodeMetrics:
         self.tick_times: list[float] = []
         self.fell = False
         self.ticks = 0
+        #: The state estimate's accuracy, when the controller reads an estimate (fed by
+        #: the caller, who knows the estimate and the truth at the same instant).
+        self.estimate_errors: EstimateErrors | None = None
 
     def record(self, out: ControlOutput, *, stance_legs: list[str],
                foot_error_m: float | None = None, holding: bool = False,
@@ -207,4 +344,6 @@ class EpisodeMetrics:
             tick_max_us=float(np.max(times)),
             real_time_factor=duration / wall_time_s if wall_time_s > 0 else math.inf,
             fell=self.fell,
+            **({} if self.estimate_errors is None else {
+                f"estimate_{k}": v for k, v in self.estimate_errors.summary().items()}),
         )

@@ -1,33 +1,45 @@
-"""A MuJoCo GO2 plant behind the :class:`actions.RobotInterface`, in its actuators' order."""
+"""A MuJoCo GO2 plant behind the :class:`actions.RobotInterface`: its sensors, its actuators' order."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from sim.sensors import DEFAULT_SENSORS, SensorModel, SimulatedSensors
 from sim.simulator import Go2Simulator
 from wbc.errors import ConfigurationError
 from wbc.motor_command import MotorCommand
+from wbc.sensor_record import SensorRecord
 from wbc.validation import as_float
 
 
 class MujocoRobot:
-    """The simulated robot as a real one would present itself: its own joint order.
+    """The simulated robot as a real one would present itself: its own joint order, sensors.
 
     Its joint order is the plant's actuator order (the Unitree SDK's FR, FL, RR, RL when the
-    plant is built that way); :class:`actions.MappedRobot` wires it to the description by
-    name. Writing torques advances the simulation by one control period.
+    plant is built that way), and its feet come in the order its legs first appear in it;
+    :class:`actions.MappedRobot` wires both to the description by name. Each
+    :meth:`read_sensors` samples the simulated sensors once (one control period); writing a
+    command advances the simulation by one control period. :meth:`read_state` is the exact
+    state, which only a simulator has (metrics, tests, ``--state truth``).
 
     Args:
         sim: The plant.
-        control_period_s: Simulated time [s] one torque command lasts (a multiple of the
-            physics timestep).
+        control_period_s: Simulated time [s] one command lasts (a multiple of the physics
+            timestep).
+        sensors: The sensor model: a :class:`sim.sensors.SensorModel` or a preset name
+            (default ``go2``: noise, biases, an attitude filter; ``exact``: the truth).
+        sensor_seed: Seed of the sensors' noise and biases.
     """
 
-    def __init__(self, sim: Go2Simulator, *, control_period_s: float = 1e-3):
+    def __init__(self, sim: Go2Simulator, *, control_period_s: float = 1e-3,
+                 sensors: SensorModel | str = DEFAULT_SENSORS, sensor_seed: int = 0):
         self.sim = sim
         self.substeps = max(1, round(control_period_s / sim.timestep_s))
         self._order = sim.actuator_map.index  # actuator i drives description joint index[i]
         self._reorder = not np.array_equal(self._order, np.arange(len(self._order)))
+        legs = dict.fromkeys(name.split("_")[0] for name in self.joint_names)
+        self.sensors = SimulatedSensors(sim, sensors, seed=sensor_seed, leg_order=tuple(legs))
+        self._record = SensorRecord.zeros()
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -35,12 +47,22 @@ class MujocoRobot:
         return self.sim.actuator_map.other_names
 
     @property
+    def leg_names(self) -> tuple[str, ...]:
+        """The feet's order in the sensor record."""
+        return self.sensors.leg_order
+
+    @property
     def time_s(self) -> float:
         """Simulated time [s]."""
         return self.sim.time_s
 
+    def read_sensors(self) -> SensorRecord:
+        """One sample of the simulated sensors, in the robot's orders (this robot's buffer)."""
+        self.sensors.sample(self._record)
+        return self._record
+
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(q, v)``, Pinocchio convention, joints in actuator order."""
+        """The exact ``(q, v)``, Pinocchio convention, joints in actuator order."""
         q, v = self.sim.state()
         if self._reorder:
             q[7:] = q[7:][self._order]

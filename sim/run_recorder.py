@@ -76,23 +76,38 @@ class TickRecorder:
 
 
 class MetricsHook:
-    """Feeds :class:`sim.episode_metrics.EpisodeMetrics` every tick."""
+    """Feeds :class:`sim.episode_metrics.EpisodeMetrics` every tick, from now on.
+
+    Measured on the simulator's true state: the raised foot's error is its true position
+    against its target carried from the estimator's world into the simulator's (the frames
+    aligned now, at the hook's creation: a goal's start), and the state estimate is compared
+    with the truth at the instant it describes.
+    """
 
     def __init__(self, loop: ControlLoop, phase_of: Callable[[], str], leg: str = RAISED_LEG):
-        from sim.episode_metrics import EpisodeMetrics
+        from sim.episode_metrics import EpisodeMetrics, EstimateErrors, FrameAlignment
 
         self.metrics = EpisodeMetrics(loop.sim, loop.controller.description.effort_limit)
         self.phase_of = phase_of
         self.leg = leg
         self._row = LEGS.index(leg)
+        #: The truth at the instant the next tick's state describes (before its physics).
+        self._truth = loop.true_state()
+        self.alignment = FrameAlignment(loop.context.q, self._truth[0])
+        if loop.estimator is not None:
+            self.metrics.estimate_errors = EstimateErrors(self.alignment)
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         phase = self.phase_of()
         error = None
         if phase in TRACKING_PHASES:
-            target = loop.controller.foot_tasks[self.leg].target
+            target = self.alignment.point_to_true(loop.controller.foot_tasks[self.leg].target)
             foot = loop.sim.foot_position_array()[self._row]
             error = float(np.linalg.norm(foot - target))
+        errors = self.metrics.estimate_errors
+        if errors is not None:  # the tick's estimate against the truth it saw
+            errors.record(loop.context.q, loop.context.v, *self._truth)
+        self._truth = loop.true_state()
         self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
                             holding=phase == PHASE_NAMES[LiftPhase.HOLDING])
 

@@ -16,6 +16,9 @@ from wbc.validation import as_float, check_name
 #: Collision groups: robot geoms touch the floor but not each other.
 _ROBOT_CONTYPE, _ROBOT_CONAFFINITY = 2, 1
 _FLOOR_CONTYPE, _FLOOR_CONAFFINITY = 1, 2
+#: Radius [m] of the site whose touch sensor reads a foot's normal force: beyond any foot
+#: sphere a plant may have (at most 0.05 m), and only the foot's own geom counts.
+TOUCH_SITE_RADIUS_M = 0.06
 
 
 def build_go2_spec(
@@ -89,6 +92,12 @@ def build_go2_spec(
             solimp=[0.95, 0.99, 0.001, 0.5, 2.0],
             mass=0,
         )
+        # The foot's normal force, for the simulated foot-force sensor (sim.sensors): a
+        # touch sensor sums the normal forces of the contacts inside its site, on its body.
+        foot.add_site(name=f"{leg}_foot_touch", type=mujoco.mjtGeom.mjGEOM_SPHERE,
+                      size=[TOUCH_SITE_RADIUS_M, 0, 0], group=5)
+        spec.add_sensor(name=f"{leg}_foot_touch", type=mujoco.mjtSensor.mjSENS_TOUCH,
+                        objtype=mujoco.mjtObj.mjOBJ_SITE, objname=f"{leg}_foot_touch")
 
     world = spec.worldbody
     world.add_geom(

@@ -140,12 +140,20 @@ class Go2Simulator:
         self._qpos, self._qvel = self.data.qpos, self.data.qvel
         self._ctrl, self._xfrc = self.data.ctrl, self.data.xfrc_applied
         self._xpos = self.data.xpos
-        # Actuator i drives joint ``_actuator_qpos[i]`` (qpos index) / ``_actuator_dof[i]``.
-        self._actuator_dof = self.model.jnt_dofadr[self.model.actuator_trnid[:, 0]]
-        self._actuator_qpos = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
         self._kp = self.model.actuator_biasprm[:, 1]  # views: written in place
         self._kd = self.model.actuator_biasprm[:, 2]
         self.effort_limit = self.model.actuator_forcerange[:, 1].copy()  # actuator order
+        #: Actuator i drives the joint at qpos index ``actuator_qpos[i]`` and qvel index
+        #: ``actuator_dof[i]``.
+        joints = self.model.actuator_trnid[:, 0]
+        self.actuator_qpos = np.ascontiguousarray(self.model.jnt_qposadr[joints], dtype=np.intp)
+        self.actuator_dof = np.ascontiguousarray(self.model.jnt_dofadr[joints], dtype=np.intp)
+        touch = [self.model.sensor(f"{leg}_foot_touch") for leg in LEGS]
+        start = touch[0].adr[0]
+        if [int(t.adr[0]) for t in touch] != list(range(start, start + len(LEGS))):
+            raise ConfigurationError("the feet's touch sensors are not consecutive in sensordata")
+        self._touch = self.data.sensordata[start:start + len(LEGS)]
+        self._actuator_force = self.data.actuator_force
         self._nq, self._nv = self.model.nq, self.model.nv
         self.reset("standing")
 
@@ -153,6 +161,29 @@ class Go2Simulator:
     def time_s(self) -> float:
         """Simulated time [s]."""
         return float(self.data.time)
+
+    @property
+    def qpos(self) -> np.ndarray:
+        """MuJoCo's generalized positions (a live view: read, never write)."""
+        return self._qpos
+
+    @property
+    def qvel(self) -> np.ndarray:
+        """MuJoCo's generalized velocities (world linear, body angular; a live view)."""
+        return self._qvel
+
+    def foot_normal_forces(self) -> np.ndarray:
+        """Normal force [N] on each foot (4,), ``LEGS`` order, at the last step (a live view).
+
+        MuJoCo's touch sensors: the sum of the normal forces of each foot's contacts, as
+        computed in the last physics step.
+        """
+        return self._touch
+
+    def actuator_torque(self) -> np.ndarray:
+        """Torque [N m] each motor applied in the last step (12,), the plant's actuator
+        order (a live view): the drivers' law, clipped at the effort limits."""
+        return self._actuator_force
 
     @property
     def timestep_s(self) -> float:
@@ -230,8 +261,7 @@ class Go2Simulator:
 
     def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
         """Joint positions [rad] and velocities [rad/s] (12,), the plant's actuator order."""
-        return (self.data.qpos[self._actuator_qpos].copy(),
-                self.data.qvel[self._actuator_dof].copy())
+        return (self.data.qpos[self.actuator_qpos], self.data.qvel[self.actuator_dof])
 
     def _advance(self, n_steps: int) -> None:
         if not (self._pushes or self._xfrc_dirty):  # no force to apply or to clear

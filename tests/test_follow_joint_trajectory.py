@@ -30,6 +30,7 @@ from actions.follow_joint_trajectory_behaviour import (
     plan_trajectory,
 )
 from actions.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, STAND_ACTION
+from actions.robot_context import tilt_deg
 from sim.control_loop import ControlLoop
 from wbc.description import JOINT_NAMES
 
@@ -50,15 +51,17 @@ def goal(names, *points, stamp: Time | None = None, **fields) -> FollowJointTraj
 
 
 def joints(loop: ControlLoop) -> np.ndarray:
-    return np.array(loop.context.q[7:])
+    """The joint angles [rad], description order (the simulator's true state)."""
+    return loop.true_state()[0][7:]
 
 
 def assert_standing(loop: ControlLoop, stance: list[str]) -> None:
     """Spin a little, then: upright at standing height on the given feet, no fallback."""
     loop.spin_for(0.05)
+    q, _ = loop.true_state()
     assert loop.controller.stance_legs == stance
-    assert loop.context.q[2] > 0.30
-    assert loop.context.tilt_deg() < 3.0
+    assert q[2] > 0.30
+    assert tilt_deg(q) < 3.0
     assert loop.last_output.status.name == "OK"
 
 
@@ -276,7 +279,8 @@ def test_tutorial_one_point_for_a_leg_reached_in_3_s_with_send_goal_and_wait():
     assert following[-1].desired.time_from_start.to_seconds() == pytest.approx(3.0, abs=0.021)
     tracking = max(np.abs(m.error.positions).max() for m in following)
     assert tracking < 0.01
-    assert loop.context.q[2] > 0.25 and loop.context.tilt_deg() < 3.0
+    q, _ = loop.true_state()
+    assert q[2] > 0.25 and tilt_deg(q) < 3.0
     loop.spin_for(0.5)  # the leg holds its target, in swing, on three feet
     assert np.all(np.abs(joints(loop)[3:6] - target) < DEFAULT_GOAL_TOLERANCE_RAD)
     assert_standing(loop, ["FL", "RL", "RR"])
@@ -400,7 +404,7 @@ def test_cancel_mid_trajectory_holds_the_leg_and_ends_canceled():
     assert following[0].header.stamp.to_seconds() == pytest.approx(1.6, abs=0.002)
     loop.spin_for(0.5)
     assert abs(joints(loop)[FR_CALF] - at_cancel) < 0.05  # stopped near where it was
-    assert abs(loop.context.v[6 + FR_CALF]) < 0.05
+    assert abs(loop.true_state()[1][6 + FR_CALF]) < 0.05
     assert_standing(loop, ["FL", "RL", "RR"])
 
 

@@ -8,6 +8,7 @@ from actions.high_five_behaviour import (
     INVALID_HOLD_SECONDS, INVALID_TARGET_HEIGHT, ROBOT_NOT_READY,
 )
 from actions.messages import StandGoal
+from actions.robot_context import tilt_deg
 from sim.control_loop import ControlLoop
 from wbc.description import LEGS, UNITREE_SDK_JOINT_NAMES
 
@@ -16,7 +17,7 @@ PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading", 
 
 
 class Watch:
-    """Per-tick record of what matters for safety: height, tilt, foot forces."""
+    """Per-tick record of what matters for safety, on the true state: height, tilt."""
 
     def __init__(self, loop: ControlLoop):
         self.min_height = np.inf
@@ -24,8 +25,9 @@ class Watch:
         loop.hooks.append(self)
 
     def __call__(self, loop, out):
-        self.min_height = min(self.min_height, loop.context.q[2])
-        self.max_tilt = max(self.max_tilt, loop.context.tilt_deg())
+        q, _ = loop.true_state()
+        self.min_height = min(self.min_height, q[2])
+        self.max_tilt = max(self.max_tilt, tilt_deg(q))
 
 
 def four_feet_loaded(loop, fr_min_n=30.0):

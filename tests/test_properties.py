@@ -21,6 +21,7 @@ from actions.messages import (
     JointTrajectory,
     JointTrajectoryPoint,
 )
+from actions.robot_context import tilt_deg
 from actions.robot_interface import MappedRobot
 from sim import cli
 from sim.control_loop import ControlLoop
@@ -54,7 +55,9 @@ def loop() -> ControlLoop:
 
 def four_feet_standing(loop: ControlLoop) -> bool:
     forces = loop.sim.foot_contact_forces()
-    return loop.context.is_standing() and all(forces[leg][2] > 5.0 for leg in LEGS)
+    q, _ = loop.true_state()
+    return (len(loop.controller.stance_legs) == 4 and q[2] > 0.25 and tilt_deg(q) < 5.0
+            and all(forces[leg][2] > 5.0 for leg in LEGS))
 
 
 def beyond_float(value) -> bool:

@@ -18,12 +18,15 @@ from benchmarks.robustness import (
     PLANT_CASES,
     PUSH_INTO_HOLD_S,
     Episode,
+    PlantCase,
     hold_push,
     make_loop,
     run_high_five,
     standing_on_four_feet,
 )
+from actions.robot_context import tilt_deg
 from sim.control_loop import ControlLoop
+from sim.sensor_faults import FaultyRobot, SensorFault
 from wbc.backends import QpProblem, QpResult, register_backend
 from wbc.backends.backend import unregister_backend
 from wbc.backends.daqp_backend import DaqpBackend
@@ -199,7 +202,8 @@ def infeasible_qp(loop: ControlLoop, ticks: int) -> None:
 
 
 def nan_state(loop: ControlLoop, ticks: int) -> None:
-    """The FR thigh encoder reads NaN (a sensor dropout)."""
+    """The controller is handed a state with a NaN (FR thigh): a loop of a user's own that
+    passes a broken reading on (this library's estimator never does)."""
     robot = loop.robot.robot
     read = robot.read_state
 
@@ -211,6 +215,15 @@ def nan_state(loop: ControlLoop, ticks: int) -> None:
     robot.read_state = broken
     loop.spin_for(ticks * 1e-3)
     robot.read_state = read
+
+
+def encoder_nan(loop: ControlLoop, ticks: int) -> None:
+    """The FR thigh encoder reads NaN for ``ticks`` periods (a sensor dropout)."""
+    inner = loop.robot.robot
+    loop.robot.robot = FaultyRobot(inner, [SensorFault("joint_nan", loop.sim.time_s,
+                                                       ticks * 1e-3, "FR_thigh_joint")])
+    loop.spin_for(ticks * 1e-3)
+    loop.robot.robot = inner
 
 
 def torque_beyond_limits(loop: ControlLoop, ticks: int) -> None:
@@ -229,16 +242,18 @@ def torque_beyond_limits(loop: ControlLoop, ticks: int) -> None:
 
 
 FAULTS = {
-    # name: (inject, ticks, statuses of the tick, its message contains)
+    # name: (inject, ticks, statuses of the tick, its message contains, state source)
     "solver failure": (solver_failure, 10, {ControlStatus.RESOLVED},
-                       f"QP failed: {INJECTED}; the problem is feasible: commanded a fresh DAQP"),
+                       f"QP failed: {INJECTED}; the problem is feasible: commanded a fresh DAQP",
+                       "estimate"),
     "infeasible QP": (infeasible_qp, 10, {ControlStatus.RELAXED},
-                      "infeasible constraint group: torque limits"),
+                      "infeasible constraint group: torque limits", "estimate"),
     "NaN in the state": (nan_state, 1, {ControlStatus.FALLBACK},
-                         "state: non-finite values at q[11]"),
+                         "state: non-finite values at q[11]", "truth"),
     "torque beyond the limits": (
         torque_beyond_limits, 1, {ControlStatus.FALLBACK},
-        "command rejected: tau_ff: beyond the effort limits at joints ['FR_thigh_joint']"),
+        "command rejected: tau_ff: beyond the effort limits at joints ['FR_thigh_joint']",
+        "estimate"),
 }
 
 
@@ -261,19 +276,21 @@ def run_until_done(loop: ControlLoop, future, timeout_s: float = 10.0):
 
 
 def still_after(loop: ControlLoop, seconds: float) -> tuple[float, float]:
-    """Run ``seconds``; return the largest joint speed [rad/s] at the end, the base's travel [m]."""
+    """Run ``seconds``; return the largest joint speed [rad/s] at the end, the base's travel
+    [m] over the second half (the simulator's true state)."""
     heights = []
-    loop.hooks.append(lambda lp, out: heights.append(lp.context.q[2]))
+    loop.hooks.append(lambda lp, out: heights.append(lp.true_state()[0][2]))
     loop.spin_for(seconds)
     loop.hooks.pop()
-    return float(np.max(np.abs(loop.context.v[6:]))), float(np.ptp(heights[len(heights) // 2:]))
+    _, v = loop.true_state()
+    return float(np.max(np.abs(v[6:]))), float(np.ptp(heights[len(heights) // 2:]))
 
 
 @pytest.mark.parametrize("fault", FAULTS)
 def test_fault_during_the_hold_aborts_safely_and_the_robot_recovers(fault, failing_backend):
-    inject, ticks, statuses, message = FAULTS[fault]
+    inject, ticks, statuses, message, state = FAULTS[fault]
     controller = WholeBodyController(backend=failing_backend)
-    loop = make_loop(controller=controller)
+    loop = make_loop(PlantCase(state=state), controller=controller)
     log = StatusLog()
     loop.hooks.append(log)
     goal = loop.client("high_five").send_goal_async(HighFiveGoal(target_height=0.4,
@@ -308,18 +325,21 @@ def test_long_sensor_dropout_ends_the_goal_at_once_and_stand_puts_the_foot_down(
     goal = loop.client("high_five").send_goal_async(HighFiveGoal(target_height=0.4,
                                                                  hold_seconds=1))
     loop.spin_for(FAULT_AT_S)
-    nan_state(loop, 100)
+    encoder_nan(loop, 100)
     result = run_until_done(loop, goal.result().get_result_async(), timeout_s=0.001)
     assert result.status is GoalStatus.ABORTED
+    # 10 ms on the last good joints (the estimator's trust timeout), then 50 ticks of the
+    # controller's safe command.
     assert result.result.message == (
-        "aborted: controller fault for 50 ticks (state: non-finite values at q[11]); the "
-        "controller holds the joints with damping while the fault lasts; a Stand goal puts a "
-        "raised foot down afterwards")
+        "aborted: controller fault for 50 ticks (state estimate: no trustworthy sensor sample "
+        "for 60 ms (limit 10 ms): joint readings non-finite at [4]); the controller holds the "
+        "joints with damping while the fault lasts; a Stand goal puts a raised foot down "
+        "afterwards")
     # The controller took over again when the state came back: on three feet, foot up, still.
     assert loop.controller.stance_legs == ["FL", "RL", "RR"]
     speed, travel = still_after(loop, 2.0)
     assert speed < 0.01 and travel < 1e-3, (speed, travel)
-    assert loop.sim.foot_positions()["FR"][2] > 0.3 and loop.context.tilt_deg() < 2.0
+    assert loop.sim.foot_positions()["FR"][2] > 0.3 and tilt_deg(loop.true_state()[0]) < 2.0
     stand = loop.client("stand").send_goal_and_wait(StandGoal(duration_s=1.0), timeout=5.0)
     assert stand.status is GoalStatus.SUCCEEDED, stand.result.message
     assert standing_on_four_feet(loop)

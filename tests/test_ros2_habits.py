@@ -230,7 +230,7 @@ def test_the_one_joint_follow_joint_trajectory_client_runs_to_succeeded() -> Non
     assert client.log[-1] == "Result: 0 ''"
     phases = list(dict.fromkeys(line.split()[2] for line in client.log[1:-1]))
     assert phases == ["shifting", "unloading", "following", "succeeded"]
-    calf = client.loop.context.q[7 + JOINT_NAMES.index("FR_calf_joint")]
+    calf = client.loop.true_state()[0][7 + JOINT_NAMES.index("FR_calf_joint")]
     assert calf == pytest.approx(-1.9, abs=DEFAULT_GOAL_TOLERANCE_RAD)
     sent = client._send_goal_future.result().goal  # the server's copy, as filled
     assert sent.trajectory.points[0].time_from_start.sec == 1

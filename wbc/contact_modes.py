@@ -89,6 +89,14 @@ class ContactModes:
         full = self.config.max_normal_force_n
         return [leg for leg in LEGS if self._stance[leg] and self._max_force[leg] >= full]
 
+    def normal_force_bounds(self, out: np.ndarray) -> np.ndarray:
+        """Each foot's normal-force bound [N] into ``out`` (4,), ``LEGS`` order, 0 in swing:
+        the contact schedule a state estimator reads (:class:`wbc.StateEstimator`)."""
+        stance, bound = self._stance, self._max_force
+        for i, leg in enumerate(LEGS):
+            out[i] = bound[leg] if stance[leg] else 0.0
+        return out
+
     def max_normal_force(self, leg: str) -> float:
         """Current upper bound [N] of a foot's normal force."""
         check_name("leg", leg, LEGS)

@@ -1,0 +1,398 @@
+"""What the simulated GO2 measures: IMU, joint encoders and torques, foot-force counts, with noise.
+
+MuJoCo's sensor ``noise`` attribute is stored, never applied; this module adds the noise
+itself, seeded, once per control period. A :class:`SensorModel` names the numbers (presets
+in :data:`SENSOR_PRESETS`, any field changed by name); :class:`SimulatedSensors` turns the
+plant's true state into a :class:`wbc.SensorRecord` in the plant's joint and leg order, as a
+real GO2's ``rt/lowstate`` would deliver it. The true state stays on the simulator for
+metrics, logs and tests; the controller only ever sees the records.
+
+How each signal is made, every control period of ``dt`` seconds:
+
+- gyroscope: the base's angular velocity (base frame) + bias + white noise; the bias starts
+  at a random draw and walks (``gyro_bias_walk`` [rad/s/sqrt(s)]).
+- accelerometer: the specific force at the IMU site (the URDF's ``imu`` frame), from the
+  site's velocity change over the period (what an IMU's anti-aliasing filter delivers) minus
+  gravity, in the IMU frame; + bias (random start, random walk) + white noise.
+- orientation: the robot's own attitude filter, a complementary filter on the noisy gyro and
+  accelerometer that pulls roll and pitch towards the accelerometer's gravity with time
+  constant ``attitude_time_constant_s``; it has no magnetometer, so its yaw drifts with the
+  gyro's z bias. Its integral term (critically damped) learns the roll and pitch gyro
+  bias. Started on the true attitude. A time constant of 0 reports the truth.
+- joints: position + white noise, then quantised to the encoder's resolution; velocity +
+  white noise; torque (the drivers' applied torque) + white noise. Robot joint order.
+- feet: a raw count ``offset + gain * normal force + noise``, clipped to ``[0, full scale]``
+  and rounded when ``foot_force_integer`` (the message's int16). Robot leg order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, fields, replace
+from typing import TYPE_CHECKING, Any
+
+import numba
+import numpy as np
+
+from wbc.description import LEGS
+from wbc.errors import ConfigurationError
+from wbc.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, rotate_inverse
+from wbc.sensor_record import SensorRecord
+from wbc.validation import as_float, check_name
+
+if TYPE_CHECKING:
+    from sim.simulator import Go2Simulator
+
+#: Standard normal draws generated at a time (per channel), refilled when used up.
+_NOISE_BLOCK = 1024
+#: Noise channels a sample draws: gyro (3), gyro bias walk (3), accel (3), accel bias walk
+#: (3), joint position, velocity and torque (12 each), feet (4).
+_CHANNELS = 52
+_GRAVITY = 9.81
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """The simulated GO2's sensors: noise, biases, resolution and scale of each signal.
+
+    Build one from a preset and change any field by name::
+
+        SensorModel.preset("go2").with_params(gyro_noise_rad_s=0.01, foot_force_gain=0.0)
+
+    Attributes:
+        name: The preset it came from (``+`` and the changes when changed).
+        gyro_noise_rad_s: Gyroscope white noise, standard deviation per sample [rad/s].
+        gyro_bias_rad_s: Standard deviation of the gyroscope's starting bias [rad/s].
+        gyro_bias_walk: Its random walk [rad/s/sqrt(s)].
+        accel_noise_m_s2: Accelerometer white noise per sample [m/s^2].
+        accel_bias_m_s2: Standard deviation of its starting bias [m/s^2].
+        accel_bias_walk: Its random walk [m/s^2/sqrt(s)].
+        attitude_time_constant_s: The robot's attitude filter's roll/pitch correction time
+            constant [s]; 0 reports the true orientation.
+        joint_position_noise_rad: Joint position white noise [rad].
+        joint_position_resolution_rad: The encoders' step at the joint [rad] (0: none).
+        joint_velocity_noise_rad_s: Joint velocity white noise [rad/s].
+        joint_torque_noise_nm: Estimated joint torque white noise [N m].
+        foot_force_offset: A foot sensor's count with no load.
+        foot_force_gain: Counts per newton of normal force (0: no foot sensors: a constant
+            ``offset``).
+        foot_force_noise: White noise of the count.
+        foot_force_full_scale: The highest count the sensor reports.
+        foot_force_integer: Round the count to an integer (the message's int16).
+    """
+
+    name: str = "go2"
+    gyro_noise_rad_s: float = 0.004
+    gyro_bias_rad_s: float = 2e-4
+    gyro_bias_walk: float = 1e-5
+    accel_noise_m_s2: float = 0.03
+    accel_bias_m_s2: float = 0.02
+    accel_bias_walk: float = 1e-4
+    attitude_time_constant_s: float = 5.0
+    joint_position_noise_rad: float = 5e-5
+    joint_position_resolution_rad: float = 3e-5
+    joint_velocity_noise_rad_s: float = 0.02
+    joint_torque_noise_nm: float = 0.1
+    foot_force_offset: float = 10.0
+    foot_force_gain: float = 2.5
+    foot_force_noise: float = 3.0
+    foot_force_full_scale: float = 1000.0
+    foot_force_integer: bool = True
+
+    def __post_init__(self) -> None:
+        for name, high in _RANGES.items():
+            as_float(name, getattr(self, name), low=0.0, high=high)
+        if not isinstance(self.foot_force_integer, bool):
+            raise ConfigurationError(
+                f"foot_force_integer: expected true or false, received "
+                f"{self.foot_force_integer!r}")
+        if self.foot_force_full_scale <= self.foot_force_offset:
+            raise ConfigurationError(
+                f"foot_force_full_scale: expected more than foot_force_offset "
+                f"({self.foot_force_offset:g}), received {self.foot_force_full_scale:g}")
+
+    @classmethod
+    def preset(cls, name: str) -> SensorModel:
+        """The named preset (see :data:`SENSOR_PRESETS`)."""
+        check_name("sensor preset", name, SENSOR_PRESETS)
+        return SENSOR_PRESETS[name]
+
+    @staticmethod
+    def parameter_names() -> tuple[str, ...]:
+        """Every name :meth:`with_params` takes."""
+        return tuple(f.name for f in fields(SensorModel) if f.name != "name")
+
+    def with_params(self, **params: Any) -> SensorModel:
+        """This model with fields changed by name; the name records the changes.
+
+        Raises:
+            UnknownNameError: A name that is not a field (the message lists them).
+            ConfigurationError: A value out of its range (the message gives the range).
+        """
+        valid = self.parameter_names()
+        for key in params:
+            check_name("sensor parameter", key, valid)
+        if not params:
+            return self
+        label = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                          for k, v in params.items())
+        return replace(self, name=f"{self.name} + {label}", **params)
+
+    def describe(self) -> str:
+        """One line: the preset and its main numbers."""
+        if self.is_exact:
+            return f"sensors {self.name} (the true state, no noise)"
+        return (f"sensors {self.name} (gyro {self.gyro_noise_rad_s:g} rad/s, accel "
+                f"{self.accel_noise_m_s2:g} m/s^2, attitude filter "
+                f"{self.attitude_time_constant_s:g} s; joints {self.joint_position_noise_rad:g} "
+                f"rad / {self.joint_velocity_noise_rad_s:g} rad/s; feet "
+                f"{self.foot_force_gain:g} counts/N)")
+
+    @property
+    def is_exact(self) -> bool:
+        """No noise, bias or quantisation anywhere."""
+        return self == replace(SENSOR_PRESETS["exact"], name=self.name)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values, JSON-ready."""
+        return asdict(self)
+
+    def _vector(self) -> np.ndarray:
+        """The numbers the compiled sampler reads, in its order."""
+        return np.array([
+            self.gyro_noise_rad_s, self.gyro_bias_walk, self.accel_noise_m_s2,
+            self.accel_bias_walk, self.attitude_time_constant_s,
+            self.joint_position_noise_rad, self.joint_position_resolution_rad,
+            self.joint_velocity_noise_rad_s, self.joint_torque_noise_nm,
+            self.foot_force_offset, self.foot_force_gain, self.foot_force_noise,
+            self.foot_force_full_scale, float(self.foot_force_integer)])
+
+
+#: Upper bounds of the numeric fields (all are >= 0).
+_RANGES = {
+    "gyro_noise_rad_s": 1.0, "gyro_bias_rad_s": 0.5, "gyro_bias_walk": 0.1,
+    "accel_noise_m_s2": 10.0, "accel_bias_m_s2": 2.0, "accel_bias_walk": 1.0,
+    "attitude_time_constant_s": 1000.0, "joint_position_noise_rad": 0.5,
+    "joint_position_resolution_rad": 0.1, "joint_velocity_noise_rad_s": 50.0,
+    "joint_torque_noise_nm": 50.0, "foot_force_offset": 10000.0, "foot_force_gain": 1000.0,
+    "foot_force_noise": 10000.0, "foot_force_full_scale": 32767.0,
+}
+
+#: The named sensor models. ``go2`` (the default): the GO2's sensors as far as public
+#: sources tell, the rest assumed from its class of hardware (README "Sensors" table):
+#: gyroscope and accelerometer noise of a BMI088-class MEMS IMU read at about 230 Hz
+#: bandwidth (0.014 deg/s/sqrt(Hz) -> 0.004 rad/s; 175 ug/sqrt(Hz) -> 0.03 m/s^2), bias
+#: walks as go2_odometry's InEKF assumes for a GO2 (1e-5, 1e-4), starting biases left by a
+#: start-up calibration (2e-4 rad/s, 0.02 m/s^2); a 5 s attitude filter; a 15-bit rotor
+#: encoder through the 6.33:1 gearbox (3e-5 rad); foot counts of 10 unloaded and 2.5 per
+#: newton, so that the thresholds used on GO2s (20 in go2_odometry, 40/60 in Leg-KILO)
+#: separate an unloaded foot from one carrying 10 to 20 N. ``exact``: the true state.
+SENSOR_PRESETS: dict[str, SensorModel] = {
+    "go2": SensorModel(),
+    "exact": SensorModel(
+        name="exact", gyro_noise_rad_s=0.0, gyro_bias_rad_s=0.0, gyro_bias_walk=0.0,
+        accel_noise_m_s2=0.0, accel_bias_m_s2=0.0, accel_bias_walk=0.0,
+        attitude_time_constant_s=0.0, joint_position_noise_rad=0.0,
+        joint_position_resolution_rad=0.0, joint_velocity_noise_rad_s=0.0,
+        joint_torque_noise_nm=0.0, foot_force_noise=0.0, foot_force_integer=False),
+}
+#: The sensor model every simulation uses unless told otherwise.
+DEFAULT_SENSORS = "go2"
+
+
+# ------------------------------------------------------------------------- the sampler
+
+_F8 = numba.float64
+_V = _F8[::1]
+_VS = _F8[:]
+
+
+@numba.njit(numba.void(_V, _V, numba.intp[::1], numba.intp[::1], numba.intp[::1], _VS, _VS,
+                       _F8, _V, _V, numba.boolean, _V, _V, _V, _V, _V, _V, _V, _V, _V, _V,
+                       _V, _V, _V),
+            cache=True)
+def _sample(qpos, qvel, joint_qpos, joint_dof, leg_rows, actuator_force, touch, dt,
+            imu_offset, site_velocity, has_previous, noise, params, gyro_bias, accel_bias,
+            attitude, integral, quaternion, gyroscope, accelerometer, q, dq, tau, feet):  # pragma: no cover
+    """One sensor sample from MuJoCo's state (see the module docstring).
+
+    Args:
+        qpos, qvel: MuJoCo's free-joint state (world linear velocity, body angular velocity).
+        joint_qpos, joint_dof: qpos / qvel index of each joint, in the robot's joint order.
+        leg_rows: Row of ``touch`` (``LEGS`` order) of each foot, in the robot's leg order.
+        actuator_force: Each joint's applied torque [N m], in the robot's joint order.
+        touch: Normal force on each foot [N], ``LEGS`` order.
+        dt: Time since the previous sample [s].
+        imu_offset: The IMU site in the base frame [m].
+        site_velocity: In/out: the IMU site's world velocity at the previous sample.
+        has_previous: There was a previous sample (else the site is taken as not
+            accelerating).
+        noise: Standard normal draws (52,).
+        params: :meth:`SensorModel._vector`.
+        gyro_bias, accel_bias: In/out: the biases (they walk).
+        attitude: In/out: the attitude filter's quaternion ``(w, x, y, z)``.
+        integral: In/out: its integral term [rad/s] (minus the gyro bias it has learnt).
+        quaternion, gyroscope, accelerometer, q, dq, tau, feet: Out: the record's arrays.
+    """
+    (gyro_noise, gyro_walk, accel_noise, accel_walk, tau_attitude, q_noise, q_step,
+     dq_noise, tau_noise, ff_offset, ff_gain, ff_noise, ff_full, ff_integer) = (
+        params[0], params[1], params[2], params[3], params[4], params[5], params[6],
+        params[7], params[8], params[9], params[10], params[11], params[12], params[13])
+    true_quat = qpos[3:7]
+    omega = qvel[3:6]
+    # IMU site's world velocity: v_base + R (omega x r).
+    cx = omega[1] * imu_offset[2] - omega[2] * imu_offset[1]
+    cy = omega[2] * imu_offset[0] - omega[0] * imu_offset[2]
+    cz = omega[0] * imu_offset[1] - omega[1] * imu_offset[0]
+    w, x, y, z = true_quat[0], true_quat[1], true_quat[2], true_quat[3]
+    r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+    r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    vx = qvel[0] + r00 * cx + r01 * cy + r02 * cz
+    vy = qvel[1] + r10 * cx + r11 * cy + r12 * cz
+    vz = qvel[2] + r20 * cx + r21 * cy + r22 * cz
+    force = np.empty(3)
+    if has_previous and dt > 0.0:
+        force[0] = (vx - site_velocity[0]) / dt
+        force[1] = (vy - site_velocity[1]) / dt
+        force[2] = (vz - site_velocity[2]) / dt + _GRAVITY
+    else:
+        force[0] = 0.0
+        force[1] = 0.0
+        force[2] = _GRAVITY
+    site_velocity[0], site_velocity[1], site_velocity[2] = vx, vy, vz
+    rotate_inverse(true_quat, force, accelerometer)
+    root = math.sqrt(dt)
+    for k in range(3):
+        gyro_bias[k] += gyro_walk * root * noise[3 + k]
+        accel_bias[k] += accel_walk * root * noise[9 + k]
+        gyroscope[k] = omega[k] + gyro_bias[k] + gyro_noise * noise[k]
+        accelerometer[k] += accel_bias[k] + accel_noise * noise[6 + k]
+    if tau_attitude <= 0.0:
+        for k in range(4):
+            quaternion[k] = true_quat[k]
+            attitude[k] = true_quat[k]
+    else:
+        # Complementary filter: integrate the gyro, then turn the filter's "up" towards
+        # the accelerometer's by dt / tau (roll and pitch only: gravity says nothing of yaw).
+        up = np.empty(3)
+        world_up = np.array([0.0, 0.0, 1.0])
+        rotate_inverse(attitude, world_up, up)
+        norm = math.sqrt(accelerometer[0] ** 2 + accelerometer[1] ** 2 + accelerometer[2] ** 2)
+        gain = dt / tau_attitude
+        ex = ey = ez = 0.0
+        if norm > 1e-6:
+            ax, ay, az = accelerometer[0] / norm, accelerometer[1] / norm, accelerometer[2] / norm
+            # Measured "up" x estimated "up": the body-frame rotation that turns the
+            # estimate towards the measurement.
+            ex = ay * up[2] - az * up[1]
+            ey = az * up[0] - ax * up[2]
+            ez = ax * up[1] - ay * up[0]
+        # Its integral term learns the gyro's roll and pitch bias (critically damped:
+        # ki = kp^2 / 4), so that a constant bias leaves no lasting tilt error.
+        ki_dt = 0.25 * dt / (tau_attitude * tau_attitude)
+        integral[0] += ki_dt * ex
+        integral[1] += ki_dt * ey
+        integral[2] += ki_dt * ez
+        step = np.empty(4)
+        quat_exp((gyroscope[0] + integral[0]) * dt + gain * ex,
+                 (gyroscope[1] + integral[1]) * dt + gain * ey,
+                 (gyroscope[2] + integral[2]) * dt + gain * ez, step)
+        quat_multiply(attitude, step, quaternion)
+        quat_normalize(quaternion)
+        for k in range(4):
+            attitude[k] = quaternion[k]
+    for j in range(q.shape[0]):
+        angle = qpos[joint_qpos[j]] + q_noise * noise[12 + j]
+        if q_step > 0.0:
+            angle = q_step * math.floor(angle / q_step + 0.5)
+        q[j] = angle
+        dq[j] = qvel[joint_dof[j]] + dq_noise * noise[24 + j]
+        tau[j] = actuator_force[j] + tau_noise * noise[36 + j]
+    for i in range(feet.shape[0]):
+        count = ff_offset + ff_gain * touch[leg_rows[i]] + ff_noise * noise[48 + i]
+        count = min(max(count, 0.0), ff_full)
+        if ff_integer > 0.0:
+            count = math.floor(count + 0.5)
+        feet[i] = count
+
+
+class SimulatedSensors:
+    """Samples the plant's sensors into a :class:`wbc.SensorRecord`, seeded.
+
+    The record is in the plant's actuator (joint) order and in ``leg_order`` for the feet,
+    as a real robot's message is in its own. Each :meth:`sample` is one control period.
+
+    Args:
+        sim: The plant.
+        model: A :class:`SensorModel` or a preset name (default ``go2``).
+        seed: Seed of the noise and the starting biases.
+        leg_order: The feet's order in the record (default ``LEGS``: FL, FR, RL, RR).
+    """
+
+    def __init__(self, sim: Go2Simulator, model: SensorModel | str = DEFAULT_SENSORS, *,
+                 seed: int = 0, leg_order: Sequence[str] = LEGS):
+        if isinstance(model, str):
+            model = SensorModel.preset(model)
+        elif not isinstance(model, SensorModel):
+            raise ConfigurationError(
+                f"sensors: expected a SensorModel or a preset name "
+                f"({', '.join(SENSOR_PRESETS)}), received {model!r}")
+        legs = [check_name("leg", leg, LEGS) for leg in leg_order]
+        if sorted(legs) != sorted(LEGS):
+            raise ConfigurationError(
+                f"leg_order: expected each of {', '.join(LEGS)} once, received {list(leg_order)}")
+        self.sim = sim
+        self.model = model
+        self.seed = seed
+        self.leg_order: tuple[str, ...] = tuple(legs)
+        self._leg_rows = np.array([LEGS.index(leg) for leg in legs], dtype=np.intp)
+        self._joint_qpos = np.ascontiguousarray(sim.actuator_qpos, dtype=np.intp)
+        self._joint_dof = np.ascontiguousarray(sim.actuator_dof, dtype=np.intp)
+        from wbc.leg_kinematics import LegKinematics
+
+        self._imu_offset = LegKinematics(sim.description).imu_offset.copy()
+        self._params = model._vector()
+        self.reset()
+
+    def reset(self) -> None:
+        """Start again: new biases and noise from the seed, the attitude filter on the truth."""
+        self._rng = np.random.default_rng(self.seed)
+        m = self.model
+        self.gyro_bias = self._rng.normal(0.0, 1.0, 3) * m.gyro_bias_rad_s
+        self.accel_bias = self._rng.normal(0.0, 1.0, 3) * m.accel_bias_m_s2
+        self._attitude = np.array(self.sim.data.qpos[3:7], dtype=float)
+        self._integral = np.zeros(3)
+        self._site_velocity = np.zeros(3)
+        self._has_previous = False
+        self._last_s = self.sim.time_s
+        self._noise = np.empty((0, _CHANNELS))
+        self._row = 0
+        self.ticks = 0
+
+    def sample(self, record: SensorRecord) -> None:
+        """Fill ``record`` with a sample of the plant's current state (one per period)."""
+        sim = self.sim
+        if self._row >= len(self._noise):
+            if self.model.is_exact:
+                self._noise = np.zeros((_NOISE_BLOCK, _CHANNELS))
+            else:
+                self._noise = self._rng.standard_normal((_NOISE_BLOCK, _CHANNELS))
+            self._row = 0
+        now = sim.time_s
+        if now < self._last_s:  # the simulator was reset
+            self.reset()
+        _sample(sim.qpos, sim.qvel, self._joint_qpos, self._joint_dof, self._leg_rows,
+                sim.actuator_torque(), sim.foot_normal_forces(), now - self._last_s,
+                self._imu_offset, self._site_velocity, self._has_previous,
+                self._noise[self._row], self._params, self.gyro_bias, self.accel_bias,
+                self._attitude, self._integral, record.imu_quaternion_wxyz, record.gyroscope_rad_s,
+                record.accelerometer_m_s2, record.q, record.dq, record.tau_est,
+                record.foot_force)
+        self._row += 1
+        self._has_previous = True
+        self._last_s = now
+        self.ticks += 1
+        record.stamp_s = now
+        record.tick = self.ticks
