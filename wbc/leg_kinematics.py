@@ -21,10 +21,11 @@ _F8 = numba.float64
 
 
 @numba.njit(numba.void(_F8[::1], _F8[:, :, :, ::1], _F8[:, :, ::1], numba.int64[:, ::1],
-                       _F8[:, ::1], _F8[:, ::1], _F8[:, :, ::1], _F8[:, :, ::1]),
+                       _F8[:, ::1], _F8[:, ::1], _F8[:, :, ::1], _F8[:, :, ::1],
+                       _F8[:, :, ::1]),
             cache=True, fastmath=False)
 def leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
-                   foot_jacobian, foot_angular_jacobian):  # pragma: no cover - compiled
+                   foot_jacobian, foot_angular_jacobian, work):  # pragma: no cover - compiled
     """Foot centres, their Jacobians and angular Jacobians, base frame, all four legs.
 
     Args:
@@ -37,15 +38,15 @@ def leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_po
         foot_jacobian: Out: ``d foot_position / d q_leg`` (4, 3, 3): column k is joint k.
         foot_angular_jacobian: Out: the foot's angular velocity in the base frame per joint
             velocity (4, 3, 3): column k is joint k's axis.
+        work: Scratch space (4, 3, 3): nothing is allocated.
     """
-    rotation = np.empty((3, 3))
-    turned = np.empty((3, 3))
-    origins = np.empty((3, 3))
+    rotation, turned, origins = work[0], work[1], work[2]
+    position = work[3, 0]
     for leg in range(4):
         for r in range(3):
+            position[r] = 0.0
             for c in range(3):
                 rotation[r, c] = 1.0 if r == c else 0.0
-        position = np.zeros(3)
         for k in range(3):
             # Origin of joint k: parent origin + R_parent t_k.
             t = translations[leg, k]
@@ -143,9 +144,11 @@ class LegKinematics:
         self.foot_position = np.zeros((4, 3))
         self.foot_jacobian = np.zeros((4, 3, 3))
         self.foot_angular_jacobian = np.zeros((4, 3, 3))
+        #: Scratch space of the compiled call.
+        self.work = np.zeros((4, 3, 3))
 
     def update(self, joint_q: np.ndarray) -> None:
         """Fill the outputs for joint angles ``joint_q`` [rad] (12,), description order."""
         leg_kinematics(np.ascontiguousarray(joint_q, dtype=np.float64), self.rotations,
                        self.translations, self.axes, self.foot_offsets, self.foot_position,
-                       self.foot_jacobian, self.foot_angular_jacobian)
+                       self.foot_jacobian, self.foot_angular_jacobian, self.work)

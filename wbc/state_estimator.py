@@ -74,8 +74,12 @@ _FOOT_REASONS = {FOOT_STUCK: "stuck at {value:g}", FOOT_SATURATED: "at full scal
 # The kernel's state vector: orientation, gyro bias, yaw alignment, last good readings,
 # bookkeeping.
 _QUAT, _BIAS, _ALIGN, _OMEGA, _ACCEL = 0, 4, 7, 11, 14
-_LAST_TICK, _LAST_STAMP, _UNTRUSTED_S, _QUAT_AGE_S, _STARTED = 17, 18, 19, 20, 21
-_STATE_SIZE = 22
+_QUAT_AGE_S = 17
+_STATE_SIZE = 18
+#: Scratch space of the tick's kernel.
+_WORK_SIZE = 136
+#: ``clock``'s entries: the last sample's tick and stamp, the time without a trusted one.
+_LAST_TICK, _LAST_STAMP, _UNTRUSTED_S = 0, 1, 2
 _GRAVITY = 9.81
 
 
@@ -208,38 +212,36 @@ def _scalar_update(x, P, plus, minus, measured, variance, gain, projected):  # p
 
 
 @numba.njit(cache=True)
-def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, force_in,
-              schedule, dt_nominal, params, imu_offset, rotations, translations, axes,
-              foot_offsets, foot_position, foot_jacobian, foot_angular_jacobian, state, x, P,
-              foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, joint_q,
-              joint_dq, q_out, v_out, weight):  # pragma: no cover - compiled
-    """One tick of the estimator (see the module docstring); returns the fault flags.
+def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock,
+                 dt_nominal, quat_tol):  # pragma: no cover - compiled
+    """Which parts of this tick's sample can be used; the time step.
 
-    ``state`` holds the orientation (w, x, y, z), the gyro bias, the yaw alignment, the last
-    good angular velocity and specific force, and the bookkeeping; ``x`` (3, 6) and ``P``
-    (3, 6, 6) are the three axes' filters: ``[IMU position, IMU velocity, feet 0..3]``.
+    Args:
+        fresh: A sample arrived (``False``: none this period).
+        tick, stamp_s: Its counter and stamp [s].
+        quat_in, gyro_in, accel_in, q_in, dq_in: Its IMU and joint readings.
+        clock: In/out: ``(last tick, last stamp [s], untrusted time [s])``.
+        dt_nominal: The control period [s], used when the stamps do not give the step.
+        quat_tol: Largest ``| |quat| - 1 |`` of a usable quaternion.
+
+    Returns:
+        ``(flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok)``: the fault flags so far,
+        the time step [s], a new sample (not repeated), and each part's usability.
     """
-    (tau_q, tau_b, quat_tol, quat_timeout, sigma_p, sigma_v, sigma_f, sigma_pos, sigma_vel,
-     sigma_h, swing_scale, min_weight, full_force, use_force, force_on, force_off,
-     force_full, stuck_s, recover_s, radius) = (
-        params[0], params[1], params[2], params[3], params[4], params[5], params[6],
-        params[7], params[8], params[9], params[10], params[11], params[12], params[13],
-        params[14], params[15], params[16], params[17], params[18], params[19])
     flags = 0
     dt = dt_nominal
     new = fresh
     if not fresh:
         flags |= NO_DATA
-    elif tick == state[_LAST_TICK]:
+    elif tick == clock[0]:
         flags |= STALE
         new = False
     if new:
-        elapsed = stamp_s - state[_LAST_STAMP]
+        elapsed = stamp_s - clock[1]
         if 0.0 < elapsed < 0.1:
             dt = elapsed
-        state[_LAST_TICK] = tick
-        state[_LAST_STAMP] = stamp_s
-    # --- validity of the sample's parts
+        clock[0] = tick
+        clock[1] = stamp_s
     joints_ok = new
     if new:
         for j in range(12):
@@ -264,50 +266,36 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
             flags |= QUATERNION_NOT_UNIT
         else:
             quat_ok = True
-    # --- orientation: gyroscope, pulled towards the IMU's quaternion
-    quat = state[_QUAT:_QUAT + 4]
-    bias = state[_BIAS:_BIAS + 3]
-    omega = state[_OMEGA:_OMEGA + 3]
-    if gyro_ok:
-        for k in range(3):
-            omega[k] = gyro_in[k] - bias[k]
-    step = np.empty(4)
-    product = np.empty(4)
-    quat_exp(omega[0] * dt, omega[1] * dt, omega[2] * dt, step)
-    quat_multiply(quat, step, product)
-    quat[:] = product
-    if quat_ok:
-        measured = np.empty(4)
-        quat_multiply(state[_ALIGN:_ALIGN + 4], quat_in, measured)
-        quat_normalize(measured)
-        inverse = np.empty(4)
-        inverse[0] = quat[0]
-        inverse[1:] = -quat[1:4]
-        quat_multiply(inverse, measured, product)
-        error = np.empty(3)
-        quat_log(product, error)
-        gain = min(1.0, dt / tau_q)
-        quat_exp(gain * error[0], gain * error[1], gain * error[2], step)
-        quat_multiply(quat, step, product)
-        quat[:] = product
-        for k in range(3):
-            bias[k] -= error[k] * dt / (tau_q * tau_b)
-        state[_QUAT_AGE_S] = 0.0
+    return flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok
+
+
+@numba.njit(cache=True)
+def account_trust(flags, dt, clock):  # pragma: no cover - compiled
+    """Add ``dt`` [s] to the untrusted time ``clock[2]`` if the tick's flags make it
+    untrustworthy, else reset it."""
+    if flags & UNTRUSTED:
+        clock[2] += dt
     else:
-        state[_QUAT_AGE_S] += dt
-        if state[_QUAT_AGE_S] > quat_timeout:
-            flags |= QUATERNION_TIMEOUT
-    quat_normalize(quat)
-    rotation = np.empty((3, 3))
-    quat_rotation(quat, rotation)
-    # --- legs
-    if joints_ok:
-        for j in range(12):
-            joint_q[j] = q_in[j]
-            joint_dq[j] = dq_in[j]
-        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
-                       foot_jacobian, foot_angular_jacobian)
-    # --- contact: the schedule, fused with the foot sensors
+        clock[2] = 0.0
+
+
+@numba.njit(cache=True)
+def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on, force_off,
+                    force_full, stuck_s, recover_s, foot_contact, foot_same_s, foot_good_s,
+                    foot_reason, foot_last, weight):  # pragma: no cover - compiled
+    """Each foot's contact weight: the schedule, fused with its foot-force sensor.
+
+    The schedule's weight is the foot's normal-force bound over ``full_force`` (clipped to
+    [0, 1]); the sensor's verdict is a hysteresis between ``force_off`` and ``force_on``
+    counts. A sensor at full scale, non-finite, or (on a scheduled stance foot) repeating
+    one reading for ``stuck_s`` [s] is distrusted until it has read changing, in-range
+    values for ``recover_s`` [s]; the schedule alone then decides for that foot.
+
+    Returns:
+        :data:`FOOT_SENSOR` if a foot sensor is distrusted, else 0. ``foot_*`` are the
+        sensors' state (in/out), ``weight`` (4,) the output.
+    """
+    flags = 0
     for i in range(4):
         scheduled = min(1.0, max(0.0, schedule[i] / full_force))
         if new:
@@ -339,24 +327,41 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                     foot_contact[i] = 0.0
         if foot_reason[i] != FOOT_OK:
             flags |= FOOT_SENSOR
-        if use_force > 0.5 and foot_reason[i] == FOOT_OK:
+        if use_force and foot_reason[i] == FOOT_OK:
             weight[i] = scheduled * foot_contact[i]
         else:
             weight[i] = scheduled
-    # --- kinematic quantities of each foot, world frame, relative to the IMU site
-    relative = np.empty((4, 3))
-    velocity = np.empty((4, 3))   # the IMU's velocity measured through each foot
-    rolling = np.empty((4, 3))    # a stance foot centre's velocity as its sphere rolls
-    body = np.empty(3)
-    spin = np.empty(3)
+    return flags
+
+
+@numba.njit(cache=True)
+def foot_motion(rotation, omega, joint_dq, origin, foot_position, foot_jacobian,
+                foot_angular_jacobian, radius, relative, velocity, rolling,
+                work):  # pragma: no cover - compiled
+    """Each foot's kinematics in the world's orientation, relative to a point of the base.
+
+    Args:
+        rotation: The base's orientation ``R_world_base`` (3, 3).
+        omega: The base's angular velocity, base frame [rad/s].
+        joint_dq: Joint velocities [rad/s] (12,), description order.
+        origin: The point of the base [m] (the IMU), base frame.
+        foot_position, foot_jacobian, foot_angular_jacobian: :class:`LegKinematics`' outputs.
+        radius: The foot spheres' radius [m].
+        relative: Out (4, 3): each foot centre minus the point, world orientation [m].
+        velocity: Out (4, 3): the point's world velocity [m/s] if the foot's sphere rolls
+            on the floor without slipping.
+        rolling: Out (4, 3): the foot centre's world velocity as its sphere rolls
+            (``omega_foot x (0, 0, radius)``) [m/s].
+        work: Scratch space (4, 3).
+    """
+    body, spin, rel_v, world_spin = work[0], work[1], work[2], work[3]
     for i in range(4):
         for r in range(3):
-            body[r] = foot_position[i, r] - imu_offset[r]
+            body[r] = foot_position[i, r] - origin[r]
         for r in range(3):
             relative[i, r] = (rotation[r, 0] * body[0] + rotation[r, 1] * body[1]
                               + rotation[r, 2] * body[2])
-        # Foot centre relative to the IMU, base frame: omega x body + J dq.
-        rel_v = np.empty(3)
+        # The foot centre's velocity relative to the point, base frame: omega x body + J dq.
         rel_v[0] = omega[1] * body[2] - omega[2] * body[1]
         rel_v[1] = omega[2] * body[0] - omega[0] * body[2]
         rel_v[2] = omega[0] * body[1] - omega[1] * body[0]
@@ -365,11 +370,9 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
             for k in range(3):
                 rel_v[r] += foot_jacobian[i, r, k] * joint_dq[3 * i + k]
                 spin[r] += foot_angular_jacobian[i, r, k] * joint_dq[3 * i + k]
-        world_spin = np.empty(3)
         for r in range(3):
             world_spin[r] = (rotation[r, 0] * spin[0] + rotation[r, 1] * spin[1]
                              + rotation[r, 2] * spin[2])
-        # omega_foot x (0, 0, r): the centre of a sphere rolling on the floor.
         rolling[i, 0] = world_spin[1] * radius
         rolling[i, 1] = -world_spin[0] * radius
         rolling[i, 2] = 0.0
@@ -377,9 +380,86 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
             velocity[i, r] = rolling[i, r] - (rotation[r, 0] * rel_v[0]
                                               + rotation[r, 1] * rel_v[1]
                                               + rotation[r, 2] * rel_v[2])
+
+
+@numba.njit(cache=True)
+def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, force_in,
+              schedule, dt_nominal, params, imu_offset, rotations, translations, axes,
+              foot_offsets, foot_position, foot_jacobian, foot_angular_jacobian, clock, state,
+              x, P, foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, joint_q,
+              joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
+    """One tick of the estimator (see the module docstring); returns the fault flags.
+
+    ``state`` holds the orientation (w, x, y, z), the gyro bias, the yaw alignment, the last
+    good angular velocity and specific force, and the quaternion's age; ``x`` (3, 6) and
+    ``P`` (3, 6, 6) are the three axes' filters: ``[IMU position, IMU velocity, feet 0..3]``.
+    ``work`` (:data:`_WORK_SIZE`) is scratch space: the tick allocates nothing.
+    """
+    (tau_q, tau_b, quat_tol, quat_timeout, sigma_p, sigma_v, sigma_f, sigma_pos, sigma_vel,
+     sigma_h, swing_scale, min_weight, full_force, use_force, force_on, force_off,
+     force_full, stuck_s, recover_s, radius) = (
+        params[0], params[1], params[2], params[3], params[4], params[5], params[6],
+        params[7], params[8], params[9], params[10], params[11], params[12], params[13],
+        params[14], params[15], params[16], params[17], params[18], params[19])
+    flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok = check_sample(
+        fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock, dt_nominal,
+        quat_tol)
+    # --- orientation: gyroscope, pulled towards the IMU's quaternion
+    quat = state[_QUAT:_QUAT + 4]
+    bias = state[_BIAS:_BIAS + 3]
+    omega = state[_OMEGA:_OMEGA + 3]
+    if gyro_ok:
+        for k in range(3):
+            omega[k] = gyro_in[k] - bias[k]
+    step, product, measured, inverse = work[0:4], work[4:8], work[8:12], work[12:16]
+    error, world_accel = work[16:19], work[19:22]
+    gain_vector, projected = work[22:28], work[28:34]
+    rotation = work[34:43].reshape((3, 3))
+    relative = work[43:55].reshape((4, 3))
+    velocity = work[55:67].reshape((4, 3))
+    rolling = work[67:79].reshape((4, 3))
+    legs_work = work[79:115].reshape((4, 3, 3))
+    motion_work = work[115:127].reshape((4, 3))
+    output_work = work[127:136].reshape((3, 3))
+    quat_exp(omega[0] * dt, omega[1] * dt, omega[2] * dt, step)
+    quat_multiply(quat, step, product)
+    quat[:] = product
+    if quat_ok:
+        quat_multiply(state[_ALIGN:_ALIGN + 4], quat_in, measured)
+        quat_normalize(measured)
+        inverse[0] = quat[0]
+        for k in range(1, 4):
+            inverse[k] = -quat[k]
+        quat_multiply(inverse, measured, product)
+        quat_log(product, error)
+        gain = min(1.0, dt / tau_q)
+        quat_exp(gain * error[0], gain * error[1], gain * error[2], step)
+        quat_multiply(quat, step, product)
+        quat[:] = product
+        for k in range(3):
+            bias[k] -= error[k] * dt / (tau_q * tau_b)
+        state[_QUAT_AGE_S] = 0.0
+    else:
+        state[_QUAT_AGE_S] += dt
+        if state[_QUAT_AGE_S] > quat_timeout:
+            flags |= QUATERNION_TIMEOUT
+    quat_normalize(quat)
+    quat_rotation(quat, rotation)
+    # --- legs and contacts
+    if joints_ok:
+        for j in range(12):
+            joint_q[j] = q_in[j]
+            joint_dq[j] = dq_in[j]
+        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
+                       foot_jacobian, foot_angular_jacobian, legs_work)
+    flags |= contact_weights(new, dt, force_in, schedule, full_force, use_force > 0.5,
+                             force_on, force_off, force_full, stuck_s, recover_s, foot_contact,
+                             foot_same_s, foot_good_s, foot_reason, foot_last, weight)
+    foot_motion(rotation, omega, joint_dq, imu_offset, foot_position, foot_jacobian,
+                foot_angular_jacobian, radius, relative, velocity, rolling, motion_work)
     # --- prediction: the accelerometer, world frame
     accel = state[_ACCEL:_ACCEL + 3]
-    world_accel = np.zeros(3)
+    world_accel[:] = 0.0
     if accel_ok:
         for k in range(3):
             accel[k] = accel_in[k]
@@ -387,8 +467,6 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
             world_accel[r] = (rotation[r, 0] * accel[0] + rotation[r, 1] * accel[1]
                               + rotation[r, 2] * accel[2])
         world_accel[2] -= _GRAVITY
-    gain_vector = np.empty(6)
-    projected = np.empty(6)
     for a in range(3):
         xa = x[a]
         Pa = P[a]
@@ -426,34 +504,38 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                                sigma_vel * sigma_vel * scale, gain_vector, projected)
             _scalar_update(x[2], P[2], f, -1, radius, sigma_h * sigma_h * scale, gain_vector,
                            projected)
-    # --- outputs: the base, Pinocchio's conventions
-    offset_world = np.empty(3)
+    write_outputs(rotation, quat, omega, x[0, 0], x[1, 0], x[2, 0], x[0, 1], x[1, 1], x[2, 1],
+                  imu_offset, joint_q, joint_dq, q_out, v_out, output_work)
+    account_trust(flags, dt, clock)
+    return flags
+
+
+@numba.njit(cache=True)
+def write_outputs(rotation, quat, omega, px, py, pz, vx, vy, vz, imu_offset, joint_q, joint_dq,
+                  q_out, v_out, work):  # pragma: no cover - compiled
+    """The controller's ``(q, v)`` from the IMU site's world position ``(px, py, pz)`` and
+    velocity ``(vx, vy, vz)``, the orientation (``rotation`` and ``quat`` as w, x, y, z), the
+    body angular velocity and the joints (Pinocchio's conventions); ``work``: scratch (3, 3)."""
+    offset, spin, base = work[0], work[1], work[2]
     for r in range(3):
-        offset_world[r] = (rotation[r, 0] * imu_offset[0] + rotation[r, 1] * imu_offset[1]
-                           + rotation[r, 2] * imu_offset[2])
+        offset[r] = (rotation[r, 0] * imu_offset[0] + rotation[r, 1] * imu_offset[1]
+                     + rotation[r, 2] * imu_offset[2])
+        spin[r] = (rotation[r, 0] * omega[0] + rotation[r, 1] * omega[1]
+                   + rotation[r, 2] * omega[2])
     # v_base = v_imu - omega_world x offset_world, then into the base frame.
-    omega_world = np.empty(3)
+    base[0] = vx - (spin[1] * offset[2] - spin[2] * offset[1])
+    base[1] = vy - (spin[2] * offset[0] - spin[0] * offset[2])
+    base[2] = vz - (spin[0] * offset[1] - spin[1] * offset[0])
+    q_out[0] = px - offset[0]
+    q_out[1] = py - offset[1]
+    q_out[2] = pz - offset[2]
     for r in range(3):
-        omega_world[r] = (rotation[r, 0] * omega[0] + rotation[r, 1] * omega[1]
-                          + rotation[r, 2] * omega[2])
-    base_velocity = np.empty(3)
-    base_velocity[0] = x[0, 1] - (omega_world[1] * offset_world[2] - omega_world[2] * offset_world[1])
-    base_velocity[1] = x[1, 1] - (omega_world[2] * offset_world[0] - omega_world[0] * offset_world[2])
-    base_velocity[2] = x[2, 1] - (omega_world[0] * offset_world[1] - omega_world[1] * offset_world[0])
-    for r in range(3):
-        q_out[r] = x[r, 0] - offset_world[r]
-        v_out[r] = (rotation[0, r] * base_velocity[0] + rotation[1, r] * base_velocity[1]
-                    + rotation[2, r] * base_velocity[2])
+        v_out[r] = rotation[0, r] * base[0] + rotation[1, r] * base[1] + rotation[2, r] * base[2]
         v_out[3 + r] = omega[r]
     q_out[3], q_out[4], q_out[5], q_out[6] = quat[1], quat[2], quat[3], quat[0]
     for j in range(12):
         q_out[7 + j] = joint_q[j]
         v_out[6 + j] = joint_dq[j]
-    if flags & (STALE | NO_DATA | GYRO_BAD | JOINTS_BAD | QUATERNION_TIMEOUT):
-        state[_UNTRUSTED_S] += dt
-    else:
-        state[_UNTRUSTED_S] = 0.0
-    return flags
 
 
 @numba.njit(cache=True)
@@ -474,7 +556,7 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
     rotation = np.empty((3, 3))
     quat_rotation(quat, rotation)
     leg_kinematics(q_in, rotations, translations, axes, foot_offsets, foot_position,
-                   foot_jacobian, foot_angular_jacobian)
+                   foot_jacobian, foot_angular_jacobian, np.empty((4, 3, 3)))
     height = 0.0
     for i in range(4):
         height += radius - (rotation[2, 0] * foot_position[i, 0]
@@ -500,9 +582,50 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
     state[_BIAS:_BIAS + 3] = 0.0
     state[_OMEGA:_OMEGA + 3] = 0.0
     state[_ACCEL:_ACCEL + 3] = 0.0
-    state[_UNTRUSTED_S] = 0.0
     state[_QUAT_AGE_S] = 0.0
-    state[_STARTED] = 1.0
+
+
+def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
+                    quaternion_tolerance: float, quaternion_timeout_s: float) -> str:
+    """A tick's fault flags in words ('' when none), with the readings that raised them.
+
+    Args:
+        flags: The tick's fault flags.
+        record: Its sample (description order).
+        foot_reason: Why each foot sensor is distrusted (``FOOT_*``), ``LEGS`` order.
+        quaternion_tolerance: The estimator's unit-norm tolerance.
+        quaternion_timeout_s: Its time [s] on the gyroscope alone.
+    """
+    parts = []
+    if flags & NO_DATA:
+        parts.append("no sensor sample this period")
+    if flags & STALE:
+        parts.append(f"stale sample (tick {record.tick} repeated)")
+    if flags & JOINTS_BAD:
+        bad = [i for i in range(12)
+               if not (math.isfinite(record.q[i]) and math.isfinite(record.dq[i]))]
+        parts.append(f"joint readings non-finite at {bad}")
+    if flags & GYRO_BAD:
+        parts.append(f"gyroscope non-finite ({record.gyroscope_rad_s.tolist()})")
+    if flags & ACCEL_BAD:
+        parts.append(f"accelerometer non-finite ({record.accelerometer_m_s2.tolist()}): "
+                     "predicting without it")
+    if flags & QUATERNION_NON_FINITE:
+        parts.append(f"IMU quaternion non-finite ({record.imu_quaternion_wxyz.tolist()}): "
+                     "orientation from the gyroscope")
+    if flags & QUATERNION_NOT_UNIT:
+        norm = float(np.linalg.norm(record.imu_quaternion_wxyz))
+        parts.append(f"IMU quaternion not unit (norm {norm:.4g}, tolerance "
+                     f"{quaternion_tolerance:g}): orientation from the gyroscope")
+    if flags & QUATERNION_TIMEOUT:
+        parts.append(f"no valid IMU quaternion for more than {quaternion_timeout_s:g} s")
+    for i, leg in enumerate(LEGS):
+        reason = int(foot_reason[i])
+        if reason != FOOT_OK:
+            value = record.foot_force[i]
+            parts.append(f"{leg} foot-force sensor {_FOOT_REASONS[reason].format(value=value)}: "
+                         "contact from the schedule")
+    return "; ".join(parts)
 
 
 # ----------------------------------------------------------------------------- the class
@@ -572,7 +695,7 @@ class StateEstimator:
         self._state = np.zeros(_STATE_SIZE)
         self._state[_QUAT] = 1.0
         self._state[_ALIGN] = 1.0
-        self._state[_LAST_TICK] = -1.0
+        self._clock = np.array([-1.0, 0.0, 0.0])
         self._x = np.zeros((3, 6))
         self._P = np.zeros((3, 6, 6))
         self._foot_contact = np.ones(4)
@@ -582,6 +705,7 @@ class StateEstimator:
         self._foot_last = np.full(4, np.nan)
         self._joint_q = np.zeros(12)
         self._joint_dq = np.zeros(12)
+        self._work = np.zeros(_WORK_SIZE)
         self._input = SensorRecord.zeros()
         self._schedule = np.zeros(4)
         self._fresh = True
@@ -626,8 +750,8 @@ class StateEstimator:
         self._foot_good_s[:] = 0.0
         self._foot_reason[:] = FOOT_OK
         self._foot_last[:] = np.nan
-        self._state[_LAST_TICK] = record.tick - 1  # the record itself is the first sample
-        self._state[_LAST_STAMP] = record.stamp_s - self.control_period_s
+        # The record itself is the first sample.
+        self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0)
         self._faults_key = (0, (0, 0, 0, 0))
         self.estimate.faults = ""
         self.started = True
@@ -675,7 +799,7 @@ class StateEstimator:
         estimate = self.estimate
         estimate.flags = flags
         estimate.trusted = not flags & UNTRUSTED
-        estimate.untrusted_s = float(self._state[_UNTRUSTED_S])
+        estimate.untrusted_s = float(self._clock[_UNTRUSTED_S])
         estimate.usable = estimate.untrusted_s <= self.config.trust_timeout_s
         key = (flags, tuple(self._foot_reason.tolist()))
         if key != self._faults_key:
@@ -692,9 +816,10 @@ class StateEstimator:
             record.q, record.dq, record.foot_force, self._schedule, self.control_period_s,
             self._params, legs.imu_offset, legs.rotations, legs.translations, legs.axes,
             legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
-            legs.foot_angular_jacobian, self._state, self._x, self._P, self._foot_contact,
-            self._foot_same_s, self._foot_good_s, self._foot_reason, self._foot_last,
-            self._joint_q, self._joint_dq, estimate.q, estimate.v, estimate.contact)
+            legs.foot_angular_jacobian, self._clock, self._state, self._x, self._P,
+            self._foot_contact, self._foot_same_s, self._foot_good_s, self._foot_reason,
+            self._foot_last, self._joint_q, self._joint_dq, estimate.q, estimate.v,
+            estimate.contact, self._work)
         compiled = bind_compiled(_estimate, True, 0.0, 0.0, *arrays).func
 
         def tick() -> int:
@@ -706,41 +831,9 @@ class StateEstimator:
 
     def describe(self, flags: int | None = None) -> str:
         """What the estimator distrusts, in words ('' when nothing)."""
-        flags = self.estimate.flags if flags is None else flags
-        record = self._input
-        parts = []
-        if flags & NO_DATA:
-            parts.append("no sensor sample this period")
-        if flags & STALE:
-            parts.append(f"stale sample (tick {record.tick} repeated)")
-        if flags & JOINTS_BAD:
-            bad = [i for i in range(12)
-                   if not (math.isfinite(record.q[i]) and math.isfinite(record.dq[i]))]
-            parts.append(f"joint readings non-finite at {bad}")
-        if flags & GYRO_BAD:
-            parts.append(f"gyroscope non-finite ({record.gyroscope_rad_s.tolist()})")
-        if flags & ACCEL_BAD:
-            parts.append(f"accelerometer non-finite ({record.accelerometer_m_s2.tolist()}): "
-                         "predicting without it")
-        if flags & QUATERNION_NON_FINITE:
-            parts.append(f"IMU quaternion non-finite ({record.imu_quaternion_wxyz.tolist()}): "
-                         "orientation from the gyroscope")
-        if flags & QUATERNION_NOT_UNIT:
-            norm = float(np.linalg.norm(record.imu_quaternion_wxyz))
-            parts.append(f"IMU quaternion not unit (norm {norm:.4g}, tolerance "
-                         f"{self.config.quaternion_tolerance:g}): orientation from the "
-                         "gyroscope")
-        if flags & QUATERNION_TIMEOUT:
-            parts.append(f"no valid IMU quaternion for more than "
-                         f"{self.config.quaternion_timeout_s:g} s")
-        for i, leg in enumerate(LEGS):
-            reason = int(self._foot_reason[i])
-            if reason != FOOT_OK:
-                value = record.foot_force[i]
-                parts.append(f"{leg} foot-force sensor "
-                             f"{_FOOT_REASONS[reason].format(value=value)}: contact from the "
-                             "schedule")
-        return "; ".join(parts)
+        return describe_faults(self.estimate.flags if flags is None else flags, self._input,
+                               self._foot_reason, self.config.quaternion_tolerance,
+                               self.config.quaternion_timeout_s)
 
     @property
     def gyro_bias(self) -> np.ndarray:
