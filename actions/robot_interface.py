@@ -28,6 +28,11 @@ from wbc.sensor_record import SensorRecord
 from wbc.validation import as_vector, check_name
 
 
+#: Where a control loop's state comes from: estimated from the robot's sensors (the default,
+#: as on a real GO2), or the exact state of a simulated robot.
+STATE_SOURCES = ("estimate", "truth")
+
+
 @runtime_checkable
 class RobotInterface(Protocol):
     """A robot in its own joint and leg orders."""

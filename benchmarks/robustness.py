@@ -10,7 +10,7 @@ default :class:`wbc.WholeBodyController`, a HighFive goal of 0.40 m), on the def
    into the hold) -> S (SUCCEEDED), A (ABORTED with the robot up), F (fell: the base came
    down to 0.2 m, or ended below standing height or tilted beyond 12 deg).
 2. Plant changes (:class:`sim.plant.Plant` presets and parameters, sensor noise and control
-   delay through :class:`sim.disturbances.NoisyDelayedRobot`), 1 s hold: outcome,
+   delay through :class:`sim.disturbances.DelayedRobot`), 1 s hold: outcome,
    raised-foot tracking, stance sliding, lowest base, largest tilt.
 3. The joint sweep, 2 s hold: joint damping {0, 0.5, 1, 2, 3} N m s/rad x friction loss
    {0, 0.2, 0.4} N m x payload {none, 2 kg 5 cm in front of the base's centre}.
@@ -42,14 +42,12 @@ from actions import GoalStatus, HighFiveGoal
 from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_deg
 from benchmarks.qp_timing import machine
 from sim.cli import MetricsHook
-from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop, TickHook
-from sim.disturbances import NoisyDelayedRobot, Push, PushSchedule
+from sim.control_loop import ControlLoop, TickHook
+from sim.disturbances import Push, PushSchedule
 from sim.episode_metrics import EpisodeSummary
-from sim.mujoco_robot import MujocoRobot
 from sim.plant import Plant
-from sim.sensor_faults import FaultyRobot, SensorFault
+from sim.sensor_faults import SensorFault
 from sim.sensors import DEFAULT_SENSORS, SensorModel
-from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.description import LEGS
 from wbc.leg_lift import LegLiftTiming
@@ -86,10 +84,8 @@ class PlantCase:
 
     name: str = "nominal"
     plant: Plant = field(default_factory=Plant)
+    #: Control periods between a command and the drivers applying it.
     delay_ticks: int = 0
-    #: Extra joint noise on top of the sensor model's [rad], [rad/s].
-    position_noise_rad: float = 0.0
-    velocity_noise_rad_s: float = 0.0
     #: Control period [s] (1 ms: 1 kHz; 2 ms: 500 Hz).
     control_period_s: float = 1e-3
     #: What the robot measures (a :class:`sim.sensors.SensorModel` or a preset's name).
@@ -105,6 +101,7 @@ class PlantCase:
                 else self.sensors)
 
 
+GO2_SENSORS = SensorModel.preset(DEFAULT_SENSORS)
 PLANT_CASES = (
     PlantCase(),
     PlantCase("foot friction 0.5", MENAGERIE.with_params(foot_friction=0.5)),
@@ -117,11 +114,13 @@ PLANT_CASES = (
     PlantCase("delay 1 tick", delay_ticks=1),
     PlantCase("delay 2 ticks", delay_ticks=2),
     PlantCase("delay 4 ticks", delay_ticks=4),
-    PlantCase("noise 1e-3 rad, 1e-2 rad/s", position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
-    PlantCase("noise 5e-3 rad, 5e-2 rad/s", position_noise_rad=5e-3, velocity_noise_rad_s=5e-2),
+    PlantCase("joint noise 1e-3 rad, 0.05 rad/s", sensors=GO2_SENSORS.with_params(
+        joint_position_noise_rad=1e-3, joint_velocity_noise_rad_s=0.05)),
+    PlantCase("joint noise 5e-3 rad, 0.1 rad/s", sensors=GO2_SENSORS.with_params(
+        joint_position_noise_rad=5e-3, joint_velocity_noise_rad_s=0.1)),
     PlantCase("all: friction 0.5, 1.5 kg, delay 2, noise 1e-3",
               MENAGERIE.with_params(foot_friction=0.5, payload_kg=1.5), delay_ticks=2,
-              position_noise_rad=1e-3, velocity_noise_rad_s=1e-2),
+              sensors=GO2_SENSORS.with_params(joint_position_noise_rad=1e-3)),
 )
 QUICK_PLANT_CASES = (PLANT_CASES[1], PLANT_CASES[9])
 
@@ -240,21 +239,12 @@ def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
     ``faults_from_s`` [s] later than their own times (a goal is sent at :data:`SETTLE_S`).
     """
     period = case.control_period_s
-    sim = Go2Simulator(plant=case.plant, timestep_s=min(PHYSICS_TIMESTEP_S, period))
-    model = case.sensor_model()
-    robot: Any = MujocoRobot(sim, control_period_s=period, sensors=model, sensor_seed=seed)
-    if case.delay_ticks or case.position_noise_rad or case.velocity_noise_rad_s:
-        robot = NoisyDelayedRobot(robot, position_noise_rad=case.position_noise_rad,
-                                  velocity_noise_rad_s=case.velocity_noise_rad_s,
-                                  delay_ticks=case.delay_ticks, seed=seed)
-    if case.sensor_faults:
-        robot = FaultyRobot(robot, [replace(f, at_s=f.at_s + faults_from_s)
-                                    for f in case.sensor_faults],
-                            foot_full_scale=model.foot_force_full_scale)
-    loop = ControlLoop(robot, controller or WholeBodyController(control_period_s=period),
-                       state=case.state)
-    loop.sim = sim
-    return loop
+    return ControlLoop.simulated(
+        plant=case.plant, control_period_s=period,
+        controller=controller or WholeBodyController(control_period_s=period),
+        sensors=case.sensor_model(), sensor_seed=seed, state=case.state,
+        command_delay_ticks=case.delay_ticks,
+        sensor_faults=[replace(f, at_s=f.at_s + faults_from_s) for f in case.sensor_faults])
 
 
 def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
@@ -267,7 +257,7 @@ def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
         case: The plant, sensor noise and delay.
         pushes: Pushes whose ``at_s`` counts from the goal's start [s].
         hold_s: The goal's hold [s]. height_m: Its foot height [m].
-        seed: Seed of the sensor noise.
+        seed: Seed of the sensors' noise and biases.
         hooks: More loop hooks, called every tick from the goal on.
         after_s: How long [s] the loop runs on after the result.
         measure: Measure the episode with :class:`sim.episode_metrics.EpisodeMetrics`
@@ -321,7 +311,7 @@ def run_episode(case: PlantCase = PlantCase(), *, push: Push | None = None,
         case: The plant, sensor noise, delay and control period.
         push: A push whose ``at_s`` counts from the goal's start [s] (see :func:`hold_push`).
         hold_s: The goal's hold [s]. height_m: Its foot height [m].
-        seed: Seed of the sensor noise.
+        seed: Seed of the sensors' noise and biases.
         measure: Add the tracking, sliding and QP-failure metrics to the row.
         gains: :class:`wbc.ControllerConfig` fields for the controller (checked there); the
             default controller when empty.
@@ -411,8 +401,8 @@ def push_cell(push: tuple[float, float]) -> dict[str, Any]:
 def plant_row(case: PlantCase) -> dict[str, Any]:
     """One row of the plant table: the case's settings and its episode."""
     return {"name": case.name, "plant": dataclasses.asdict(case.plant),
-            "delay_ticks": case.delay_ticks, "position_noise_rad": case.position_noise_rad,
-            "velocity_noise_rad_s": case.velocity_noise_rad_s, **run_episode(case)}
+            "delay_ticks": case.delay_ticks, "sensors": case.sensor_model().as_dict(),
+            "state": case.state, **run_episode(case)}
 
 
 def compensation_row(run: tuple[PlantCase, bool]) -> dict[str, Any]:

@@ -232,8 +232,12 @@ def build_parser() -> argparse.ArgumentParser:
                       type=_assignment("--plant", "plant"),
                       help="a plant parameter (sim.plant.Plant: joint_damping, "
                            "joint_friction_loss, calf_friction_loss, foot_friction, payload_kg, "
-                           "...), preset, delay_ticks, position_noise_rad, velocity_noise_rad_s "
-                           "or control_period_s; repeatable")
+                           "...), preset, delay_ticks or control_period_s; repeatable")
+    grid.add_argument("--sensors", metavar="NAME=VALUES", action="append", default=[],
+                      type=_assignment("--sensors", "sensors"),
+                      help="a sensor parameter (sim.sensors.SensorModel: gyro_noise_rad_s, "
+                           "accel_bias_m_s2, joint_velocity_noise_rad_s, foot_force_gain, ...), "
+                           "preset (go2, exact) or state (estimate, truth); repeatable")
     grid.add_argument("--gain", metavar="NAME=VALUES", action="append", default=[],
                       type=_assignment("--gain", "gains"),
                       help="a wbc.ControllerConfig field (swing_kp, stance_kd, com_kp, "
@@ -271,7 +275,7 @@ def _spec(args: argparse.Namespace) -> SweepSpec:
         overrides[DIRECTIONS] = args.directions
     if args.impulses is not None:
         overrides[IMPULSES] = args.impulses
-    for path, value in (*args.plant, *args.gain, *args.set):
+    for path, value in (*args.plant, *args.sensors, *args.gain, *args.set):
         overrides[path] = value
     return spec.with_values(overrides) if overrides else spec
 

@@ -8,11 +8,15 @@ line with the same syntax)::
       directions_deg: [0, 90, 180, 270]
       impulses_ns: "2:10:5"       # START:STOP:NUM, NUM values from START to STOP
       duration_s: 0.1             # optional; into_hold_s (default 0.2) too
-    plant:                        # optional: the simulated GO2 (sim.plant.Plant) and sensors
+    plant:                        # optional: the simulated GO2 (sim.plant.Plant), delay, rate
       preset: menagerie
       payload_offset_m: [0.05, 0, 0]
       payload_kg: [0, 2]
       delay_ticks: [0, 2]
+    sensors:                      # optional: what it measures (sim.sensors.SensorModel)
+      preset: go2                 # and where the controller's state comes from:
+      state: estimate             # estimate (default) or truth
+      gyro_noise_rad_s: [0.004, 0.02]
     gains:                        # optional: wbc.ControllerConfig fields
       swing_kp: [40, 50, 60]
 
@@ -44,12 +48,14 @@ from typing import Any
 import yaml
 
 from actions.high_five_behaviour import MAX_HOLD_S
+from actions.robot_interface import STATE_SOURCES
 from benchmarks import robustness
 from benchmarks.robustness import PlantCase, hold_push
 from sim.control_loop import PHYSICS_TIMESTEP_S
 from sim.disturbances import Push
 from sim.mujoco_robot import physics_steps_per_period
 from sim.plant import PLANT_PRESETS, Plant
+from sim.sensors import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from wbc.backends import available_backends
 from wbc.controller_config import ControllerConfig
 from wbc.errors import ConfigurationError, WbcError
@@ -63,8 +69,8 @@ class SweepSpecError(ConfigurationError):
 
 #: The push axes every table and heat map lays out as impulse rows x direction columns.
 DIRECTIONS, IMPULSES = "pushes.directions_deg", "pushes.impulses_ns"
-#: Sensor and loop fields of the ``plant`` section (:class:`benchmarks.robustness.PlantCase`).
-CASE_FIELDS = ("delay_ticks", "position_noise_rad", "velocity_noise_rad_s", "control_period_s")
+#: Loop fields of the ``plant`` section (:class:`benchmarks.robustness.PlantCase`).
+CASE_FIELDS = ("delay_ticks", "control_period_s")
 #: Fields given three numbers (one value of theirs is a list).
 VECTOR_FIELDS = ("payload_offset_m", *ControllerConfig.PER_JOINT_TYPE)
 
@@ -72,10 +78,11 @@ _TOP = {"height_m": robustness.HEIGHT_M, "hold_s": robustness.HOLD_S, "seed": 0,
         "metrics": True}
 _PUSH_DEFAULTS = {"duration_s": robustness.PUSH_DURATION_S,
                   "into_hold_s": robustness.PUSH_INTO_HOLD_S}
-_SECTIONS = ("pushes", "plant", "gains")
+_SECTIONS = ("pushes", "plant", "sensors", "gains")
 _INT_FIELDS = {"hold_s", "seed", "plant.delay_ticks", "plant.condim"}
-_BOOL_FIELDS = {"metrics", "gains.eliminate_dynamics"}
-_TEXT_FIELDS = {"plant.preset", "plant.cone", "gains.backend"}
+_BOOL_FIELDS = {"metrics", "gains.eliminate_dynamics", "sensors.foot_force_integer"}
+_TEXT_FIELDS = {"plant.preset", "plant.cone", "sensors.preset", "sensors.state",
+                "gains.backend"}
 
 
 def _valid_names(section: str) -> tuple[str, ...]:
@@ -83,6 +90,8 @@ def _valid_names(section: str) -> tuple[str, ...]:
         return ("directions_deg", "impulses_ns", *_PUSH_DEFAULTS)
     if section == "plant":
         return ("preset", *Plant.parameter_names(), *CASE_FIELDS)
+    if section == "sensors":
+        return ("preset", "state", *SensorModel.parameter_names())
     return tuple(f.name for f in dataclasses.fields(ControllerConfig)
                  if f.name != "control_period_s")
 
@@ -215,14 +224,20 @@ def _check_value(path: str, value: Any) -> None:
                                      f"{', '.join(PLANT_PRESETS)}")
         elif path == "plant.delay_ticks":
             as_float(path, value, low=0, high=100)
-        elif path == "plant.position_noise_rad":
-            as_float(path, value, low=0.0, high=0.5)
-        elif path == "plant.velocity_noise_rad_s":
-            as_float(path, value, low=0.0, high=50.0)
         elif path == "plant.control_period_s":
             physics_steps_per_period(value, min(PHYSICS_TIMESTEP_S, value))
         elif section == "plant":
             Plant().with_params(**{name: value})
+        elif path == "sensors.preset":
+            if value not in SENSOR_PRESETS:
+                raise SweepSpecError(f"{path}: unknown sensor preset {value!r}; valid presets: "
+                                     f"{', '.join(SENSOR_PRESETS)}")
+        elif path == "sensors.state":
+            if value not in STATE_SOURCES:
+                raise SweepSpecError(f"{path}: unknown state source {value!r}; valid: "
+                                     f"{', '.join(STATE_SOURCES)}")
+        elif section == "sensors":
+            SensorModel().with_params(**{name: value})
         elif path == "gains.backend":
             if value not in available_backends():
                 raise SweepSpecError(f"{path}: unknown or uninstalled QP backend {value!r}; "
@@ -302,7 +317,7 @@ class SweepSpec:
             for key, value in entries.items():
                 if key not in valid:
                     what = {"pushes": "push field", "plant": "plant parameter",
-                            "gains": "controller gain"}[section]
+                            "sensors": "sensor parameter", "gains": "controller gain"}[section]
                     hint = ("; the control period is plant.control_period_s"
                             if key == "control_period_s" else "")
                     raise SweepSpecError(f"{section}.{key}: unknown {what} {key!r}; valid: "
@@ -431,12 +446,17 @@ class EpisodeSpec:
         return ", ".join(f"{p}={value_text(v)}" for p, v in self.axes.items())
 
     def plant_case(self) -> PlantCase:
-        """The plant, sensors and control period."""
+        """The plant, sensors, state source and control period."""
         plant = self.section("plant")
         base = Plant.preset(plant.pop("preset", "menagerie"))
         case = {k: plant.pop(k) for k in CASE_FIELDS if k in plant}
+        sensors = self.section("sensors")
+        model = SensorModel.preset(sensors.pop("preset", DEFAULT_SENSORS))
+        state = sensors.pop("state", "estimate")
         return PlantCase(name=self.label() or "sweep",
-                         plant=base.with_params(**dict(sorted(plant.items()))), **case)
+                         plant=base.with_params(**dict(sorted(plant.items()))),
+                         sensors=model.with_params(**dict(sorted(sensors.items()))),
+                         state=state, **case)
 
     def push(self) -> Push | None:
         """The push during the hold (``None`` without one, or for a zero impulse)."""
@@ -461,9 +481,8 @@ class EpisodeSpec:
             "seed": self.get("seed"), "metrics": self.get("metrics"),
             "push": None if push is None else dataclasses.asdict(push),
             "plant": dataclasses.asdict(case.plant),
-            "sensors": {"delay_ticks": case.delay_ticks,
-                        "position_noise_rad": case.position_noise_rad,
-                        "velocity_noise_rad_s": case.velocity_noise_rad_s},
+            "delay_ticks": case.delay_ticks,
+            "sensors": {**case.sensor_model().as_dict(), "state": case.state},
             "control_period_s": case.control_period_s,
             "controller": {f.name: getattr(config, f.name)
                            for f in dataclasses.fields(ControllerConfig)},

@@ -35,7 +35,10 @@ from sim.cli import (
     SETTLE_S,
     _plant_line,
     _plant_options,
+    _state_options,
+    simulated_loop,
     startup_objects_frozen,
+    state_line,
 )
 from wbc.errors import WbcError
 
@@ -150,7 +153,9 @@ def add_action_commands(sub: Any) -> None:
                       metavar="SECONDS",
                       help="cancel the goal if it has not ended after this many seconds of "
                            f"simulated time (default: {DEFAULT_TIMEOUT_S:g})")
-    _plant_options(send.add_argument_group("simulation"))
+    simulation = send.add_argument_group("simulation")
+    _plant_options(simulation)
+    _state_options(simulation)
     send.set_defaults(run=_send_goal, parser=send)
 
     listing = sub.add_parser(
@@ -217,13 +222,10 @@ class SendGoal:
 
     def run(self) -> int:
         """Run the goal to its end; return the exit code."""
-        from sim.control_loop import ControlLoop
-
         args = self.args
+        self.say(state_line(args))
         self.say(_plant_line(args))
-        loop = self.loop = ControlLoop.simulated(
-            plant=args.plant_model, control_period_s=args.control_period_s,
-            physics_timestep_s=args.physics_dt)
+        loop = self.loop = simulated_loop(args)
         with startup_objects_frozen():
             return self._run(loop)
 

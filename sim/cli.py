@@ -29,7 +29,10 @@ from actions.go2_actions import (
 from actions.high_five_behaviour import MAX_HOLD_S
 from actions.messages import FollowJointTrajectoryGoal, HighFiveGoal, SitGoal, StandGoal
 from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
+from actions.robot_interface import STATE_SOURCES
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
+from sim.sensor_faults import FAULT_KINDS, SensorFault
+from sim.sensors import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from sim.run_recorder import RAISED_LEG, MetricsHook, TickRecorder, write_plot
 from sim.scene_overlay import DEFAULT_OVERLAYS, SceneOverlay, parse_overlays
 from sim.trajectory_file import load_trajectory_goal
@@ -241,6 +244,39 @@ def _plant_param(text: str) -> tuple[str, Any]:
     return name, value
 
 
+def _sensor_param(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` of a sensor-model parameter, checked by the model (name and range)."""
+    name, sep, value_text = text.partition("=")
+    if not sep:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, received {text!r}")
+    value: Any = _number_or_text(value_text)
+    if name == "foot_force_integer":
+        words = {"true": True, "1": True, "yes": True, "false": False, "0": False, "no": False}
+        value = words.get(value_text.strip().lower(), value_text)
+    try:
+        SensorModel().with_params(**{name: value})
+    except WbcError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return name, value
+
+
+def _sensor_fault(text: str) -> SensorFault:
+    """``KIND,AT_S,DURATION_S[,NAME]``: a sensor fault on the simulated clock."""
+    parts = [p.strip() for p in text.split(",")]
+    expected = (f"KIND,AT_S,DURATION_S[,FOOT_OR_JOINT] with KIND one of "
+                f"{', '.join(FAULT_KINDS)} (e.g. dropout,3.5,0.02 or foot_zero,1,5,RL)")
+    if len(parts) not in (3, 4):
+        raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}")
+    try:
+        at_s, duration_s = float(parts[1]), float(parts[2])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {expected}, received {text!r}") from None
+    try:
+        return SensorFault(parts[0], at_s, duration_s, parts[3] if len(parts) == 4 else "")
+    except WbcError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
 def _number_or_text(text: str) -> float | str:
     try:
         return float(text)
@@ -273,8 +309,41 @@ def _plant_options(group: Any) -> None:
                             "(default: 0.001, or the control period if shorter)")
 
 
+def _state_options(group: Any) -> None:
+    """Where the controller's state comes from, the sensors, a command delay and faults."""
+    group.add_argument("--state", choices=STATE_SOURCES, default="estimate",
+                       help="the controller's state: 'estimate' (default: the state estimator "
+                            "on the simulated sensors, as on a real GO2) or 'truth' (the "
+                            "simulator's exact state, for comparison)")
+    group.add_argument("--sensors", choices=tuple(SENSOR_PRESETS), default=DEFAULT_SENSORS,
+                       help=f"what the simulated GO2 measures (default: {DEFAULT_SENSORS}: its "
+                            "IMU, encoders and foot sensors with noise and biases; 'exact': "
+                            "no noise)")
+    group.add_argument("--sensor-param", type=_sensor_param, action="append", default=[],
+                       metavar="NAME=VALUE",
+                       help="change one sensor parameter, repeatable: gyro_noise_rad_s, "
+                            "gyro_bias_rad_s, accel_noise_m_s2, accel_bias_m_s2, "
+                            "attitude_time_constant_s, joint_position_noise_rad, "
+                            "joint_velocity_noise_rad_s, foot_force_gain, ... (default: the "
+                            "preset's values)")
+    group.add_argument("--sensor-seed", type=_whole_in(0, 2**31 - 1, what="a seed"), default=0,
+                       metavar="N", help="seed of the sensors' noise and biases (default: 0)")
+    group.add_argument("--sensor-fault", type=_sensor_fault, action="append", default=[],
+                       metavar="KIND,AT_S,DURATION_S[,NAME]",
+                       help="a sensor fault from sim time AT_S for DURATION_S, repeatable; "
+                            f"KIND: {', '.join(FAULT_KINDS)}; NAME: the foot of a foot fault "
+                            "(default FR) or the joint of joint_nan (default FR_thigh_joint)")
+    group.add_argument("--command-delay", type=_float_in(0.0, 0.1, what="a delay", unit="s",
+                                                         fmt="g"),
+                       default=0.0, metavar="SECONDS",
+                       help="time [s] between a command and the motor drivers applying it, a "
+                            "whole number of control periods (default: 0; legged_control "
+                            "simulates a Unitree robot with 0.009)")
+
+
 def _resolve_plant(args: argparse.Namespace) -> None:
-    """Build ``args.plant_model`` and check the rates; a usage error names the option.
+    """Build ``args.plant_model`` (and the sensor model) and check the rates and the delay;
+    a usage error names the option.
 
     Imports MuJoCo: a ``--video`` run chooses its rendering backend before this.
     """
@@ -282,6 +351,12 @@ def _resolve_plant(args: argparse.Namespace) -> None:
         args.plant_model = Plant.preset(args.plant).with_params(**dict(args.plant_param))
     except WbcError as err:
         args.parser.error(f"--plant-param: {err}")
+    if hasattr(args, "sensors"):
+        try:
+            args.sensor_model = SensorModel.preset(args.sensors).with_params(
+                **dict(args.sensor_param))
+        except WbcError as err:
+            args.parser.error(f"--sensor-param: {err}")
     from sim.control_loop import PHYSICS_TIMESTEP_S
     from sim.mujoco_robot import physics_steps_per_period
 
@@ -293,6 +368,14 @@ def _resolve_plant(args: argparse.Namespace) -> None:
     except WbcError as err:
         args.parser.error(f"--control-rate: {args.control_rate:g} Hz with --physics-dt "
                           f"{args.physics_dt:g} s: {err}")
+    if hasattr(args, "command_delay"):
+        ticks = round(args.command_delay / args.control_period_s)
+        if abs(ticks * args.control_period_s - args.command_delay) > 1e-9:
+            args.parser.error(
+                f"--command-delay: expected a whole number of control periods of "
+                f"{args.control_period_s:g} s (e.g. {args.control_period_s:g}, "
+                f"{9 * args.control_period_s:g}), received {args.command_delay:g}")
+        args.command_delay_ticks = int(ticks)
 
 
 @contextlib.contextmanager
@@ -314,8 +397,33 @@ def startup_objects_frozen() -> Iterator[None]:
 
 
 def _plant_line(args: argparse.Namespace) -> str:
-    return (f"{args.plant_model.describe()}; control {args.control_rate:g} Hz, physics "
+    line = (f"{args.plant_model.describe()}; control {args.control_rate:g} Hz, physics "
             f"{args.physics_dt * 1e3:g} ms")
+    if getattr(args, "command_delay_ticks", 0):
+        line += f"; commands applied {args.command_delay * 1e3:g} ms late"
+    return line
+
+
+def state_line(args: argparse.Namespace) -> str:
+    """The first line a run prints: where the controller's state comes from, which sensors."""
+    if args.state == "truth":
+        return ("state: the simulator's exact state (--state truth; a GO2 measures no base "
+                f"position or velocity); {args.sensor_model.describe()} unused")
+    faults = "".join(f"; fault: {fault.describe()}" for fault in args.sensor_fault)
+    return (f"state: estimated (linear Kalman filter, IMU and leg kinematics) from "
+            f"{args.sensor_model.describe()}, seed {args.sensor_seed}{faults}")
+
+
+def simulated_loop(args: argparse.Namespace, pose: str = "standing") -> "ControlLoop":
+    """The loop a goal-sending command runs: plant, rates, sensors, state source, delay,
+    faults from the options."""
+    from sim.control_loop import ControlLoop
+
+    return ControlLoop.simulated(
+        pose=pose, plant=args.plant_model, control_period_s=args.control_period_s,
+        physics_timestep_s=args.physics_dt, sensors=args.sensor_model,
+        sensor_seed=args.sensor_seed, state=args.state,
+        command_delay_ticks=args.command_delay_ticks, sensor_faults=args.sensor_fault)
 
 
 def _run_options() -> argparse.ArgumentParser:
@@ -323,6 +431,7 @@ def _run_options() -> argparse.ArgumentParser:
     common = _Parser(add_help=False)
     run = common.add_argument_group("simulation")
     _plant_options(run)
+    _state_options(run)
     sim_time = _float_in(0.0, 3600.0, what="a sim time", unit="s", fmt="g")
     run.add_argument("--realtime", action="store_true",
                      help="pace the simulation to the wall clock (default: as fast as possible)")
@@ -369,14 +478,17 @@ def _run_options() -> argparse.ArgumentParser:
                           f"(default: {','.join(DEFAULT_OVERLAYS)})")
     out.add_argument("--plot", type=_output(".png", ".pdf", ".svg"), metavar="FILE.png",
                      help="plot raised-foot height vs target, CoM margin to the support edge, "
-                          "FR normal force and control tick time against sim time "
+                          "FR normal force, the state estimate's height and velocity errors "
+                          "and control tick time against sim time "
                           "(default: none)")
     out.add_argument("--report", type=_output(".json"), metavar="FILE.json",
                      help="write the result, the feedback with sim times and the run metrics "
                           "(default: none)")
     out.add_argument("--log", type=_output(".npz"), metavar="FILE.npz",
-                     help="write per-tick arrays: t_s, q, v (Pinocchio convention, "
-                          "joint_names beside), tau, raised-foot target and position, phase, "
+                     help="write per-tick arrays: t_s, q, v (the controller's state, "
+                          "Pinocchio convention, joint_names beside), q_true, v_true (the "
+                          "simulator's exact state), estimate_contact, estimate_flags, tau, "
+                          "raised-foot target and position, phase, "
                           "MuJoCo foot contact forces (4x3), CoM margin, QP status, tick time "
                           "(default: none)")
     return common
@@ -651,12 +763,9 @@ class GoalRun:
         viewer = args.viewer and not problem
         if problem:
             print(f"go2-wbc: --viewer: {problem}; running headless", file=sys.stderr)
-        from sim.control_loop import ControlLoop
-
+        self.say(state_line(args))
         self.say(_plant_line(args))
-        loop = ControlLoop.simulated(pose=args.start_pose or "standing", plant=args.plant_model,
-                                     control_period_s=args.control_period_s,
-                                     physics_timestep_s=args.physics_dt)
+        loop = simulated_loop(args, args.start_pose or "standing")
         with startup_objects_frozen():
             return self._run(loop, viewer)
 
@@ -693,7 +802,7 @@ class GoalRun:
             self.metrics = MetricsHook(loop, lambda: self.phase, self.leg)
             loop.hooks.append(_Timed(self.metrics, self.overhead_s))
         if args.log or args.plot:
-            self.recorder = TickRecorder(lambda: self.phase, self.leg)
+            self.recorder = TickRecorder(lambda: self.phase, self.leg, loop)
             loop.hooks.append(_Timed(self.recorder, self.overhead_s))
         overlay = (SceneOverlay(args.overlay, status_of=lambda: (self.phase, self.progress))
                    if args.overlay else None)
@@ -834,7 +943,8 @@ class GoalRun:
         if self.metrics is not None:
             self.summary = self.metrics.metrics.summary(
                 max(self.wall_s - self.overhead_s[0], 1e-9))
-            self.say(_metrics_text(self.summary, raised=self.action_name == HIGH_FIVE_ACTION))
+            self.say(_metrics_text(self.summary, raised=self.action_name == HIGH_FIVE_ACTION,
+                                   estimated=self.args.state == "estimate"))
         return EXIT_SUCCEEDED if success else EXIT_NOT_SUCCEEDED
 
     def _event(self, name: str, t_s: float | None = None, **details: Any) -> None:
@@ -874,6 +984,15 @@ class GoalRun:
             "goal": dataclasses.asdict(self.goal),
             "start_pose": self.args.start_pose or "standing",
             "plant": dataclasses.asdict(self.args.plant_model),
+            "state": {
+                "source": self.args.state,
+                "sensors": self.args.sensor_model.as_dict(),
+                "sensor_seed": self.args.sensor_seed,
+                "estimator": (None if self.loop.estimator is None
+                              else dataclasses.asdict(self.loop.estimator.config)),
+                "command_delay_s": self.args.command_delay,
+                "sensor_faults": [dataclasses.asdict(f) for f in self.args.sensor_fault],
+            },
             "control_rate_hz": self.args.control_rate,
             "physics_timestep_s": self.args.physics_dt,
             "result": self.result,
@@ -885,7 +1004,7 @@ class GoalRun:
         }
 
 
-def _metrics_text(summary: Any, *, raised: bool) -> str:
+def _metrics_text(summary: Any, *, raised: bool, estimated: bool) -> str:
     s = summary
     parts = []
     if raised:
@@ -897,7 +1016,16 @@ def _metrics_text(summary: Any, *, raised: bool) -> str:
               f"QP failures {s.qp_failures}",
               f"tick median {s.tick_median_us:.0f} us (p99 {s.tick_p99_us:.0f} us)",
               f"real-time factor {s.real_time_factor:.2f}"]
-    return "metrics: " + "; ".join(parts)
+    text = "metrics: " + "; ".join(parts)
+    if estimated:
+        text += (f"\nestimate vs truth: base velocity error RMS "
+                 f"{s.estimate_velocity_rms_m_s * 1e3:.1f} mm/s (max "
+                 f"{s.estimate_velocity_max_m_s * 1e3:.1f}); height error max "
+                 f"{s.estimate_height_max_mm:.2f} mm; roll / pitch error max "
+                 f"{s.estimate_roll_max_deg:.2f} / {s.estimate_pitch_max_deg:.2f} deg; drift "
+                 f"{s.estimate_horizontal_drift_mm:.1f} mm horizontal, "
+                 f"{s.estimate_yaw_drift_deg:.2f} deg yaw")
+    return text
 
 
 # --------------------------------------------------------------------------- entry point

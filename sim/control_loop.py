@@ -10,9 +10,11 @@ from actions.action_client import ActionClient
 from actions.action_runner import ActionRunner, BusyPolicy
 from actions.go2_actions import make_go2_runner
 from actions.robot_context import RobotContext
-from actions.robot_interface import MappedRobot, RobotInterface
+from actions.robot_interface import STATE_SOURCES, MappedRobot, RobotInterface
+from sim.disturbances import DelayedRobot
 from sim.mujoco_robot import MujocoRobot
 from sim.plant import DEFAULT_PLANT, Plant
+from sim.sensor_faults import FaultyRobot, SensorFault
 from sim.sensors import DEFAULT_SENSORS, SensorModel
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
@@ -27,11 +29,6 @@ from wbc.whole_body_controller import WholeBodyController
 TickHook = Callable[["ControlLoop", ControlOutput], None]
 #: Default physics timestep [s] of a simulated loop.
 PHYSICS_TIMESTEP_S = 1e-3
-
-
-#: Where the controller's state comes from: estimated from the robot's sensors (the
-#: default, as on a real GO2), or the simulator's exact state.
-STATE_SOURCES = ("estimate", "truth")
 
 
 class ControlLoop:
@@ -108,7 +105,8 @@ class ControlLoop:
                   busy_policy: BusyPolicy = BusyPolicy.REJECT,
                   controller: BalanceController | None = None,
                   sensors: SensorModel | str = DEFAULT_SENSORS, sensor_seed: int = 0,
-                  state: str = "estimate", estimator: StateEstimator | None = None
+                  state: str = "estimate", estimator: StateEstimator | None = None,
+                  command_delay_ticks: int = 0, sensor_faults: Sequence[SensorFault] = ()
                   ) -> ControlLoop:
         """A loop on a fresh MuJoCo GO2 in ``pose``, with the default whole-body controller.
 
@@ -129,6 +127,10 @@ class ControlLoop:
             sensor_seed: Seed of the sensors' noise and biases.
             state: ``estimate`` (default) or ``truth`` (see the class docstring).
             estimator: The state estimator (a default one when ``None``).
+            command_delay_ticks: Control periods between a command and the drivers applying
+                it (:class:`sim.disturbances.DelayedRobot`).
+            sensor_faults: Sensor faults on the robot's clock
+                (:class:`sim.sensor_faults.FaultyRobot`).
 
         Raises:
             ConfigurationError: A control period that is not a whole number of physics steps,
@@ -140,8 +142,14 @@ class ControlLoop:
         check_name("state source", state, STATE_SOURCES)
         sim = Go2Simulator(actuator_order=actuator_order, plant=plant,
                            timestep_s=physics_timestep_s)
-        robot = MujocoRobot(sim, control_period_s=control_period_s, sensors=sensors,
-                            sensor_seed=sensor_seed)
+        plant_robot = MujocoRobot(sim, control_period_s=control_period_s, sensors=sensors,
+                                  sensor_seed=sensor_seed)
+        robot: RobotInterface = plant_robot
+        if command_delay_ticks:
+            robot = DelayedRobot(robot, command_delay_ticks)
+        if sensor_faults:
+            robot = FaultyRobot(robot, sensor_faults,
+                                foot_full_scale=plant_robot.sensors.model.foot_force_full_scale)
         if controller is None:
             controller = WholeBodyController(control_period_s=control_period_s)
         period = getattr(getattr(controller, "config", None), "control_period_s", None)
@@ -150,7 +158,7 @@ class ControlLoop:
                 f"control_period_s: the controller is configured for {period:g} s, the loop "
                 f"for {control_period_s:g} s; give both the same period")
         sim.reset(pose)
-        robot.sensors.reset()
+        plant_robot.sensors.reset()
         loop = cls(robot, controller, busy_policy=busy_policy, state=state,
                    estimator=estimator)
         loop.sim = sim

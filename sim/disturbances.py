@@ -1,4 +1,5 @@
-"""Disturbances for robustness runs: sensor noise, control delay, pushes (plants: :mod:`sim.plant`).
+"""Disturbances for robustness runs: command delay, pushes (plants: :mod:`sim.plant`; sensors:
+:mod:`sim.sensors`, :mod:`sim.sensor_faults`).
 
 Everything is seeded and happens in simulated time, so a run with the same settings and
 seed is the same run.
@@ -8,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -16,44 +17,30 @@ from actions.robot_interface import RobotInterface
 from wbc.errors import ConfigurationError
 from wbc.motor_command import MotorCommand
 from wbc.sensor_record import SensorRecord
-from wbc.validation import as_float
 
 
-@dataclass
-class NoisyDelayedRobot:
-    """A robot whose joint sensors are noisier and whose commands arrive late.
+class DelayedRobot:
+    """A robot whose commands arrive ``delay_ticks`` control periods late.
 
-    Wraps a :class:`~actions.robot_interface.RobotInterface` (same orders): Gaussian noise is
-    added to the joint positions and velocities of its sensor records (and of its exact
-    state, for ``--state truth``), and each command is applied ``delay_ticks`` control
-    periods after it was sent (a transport delay: legged_control's simulation of a Unitree
-    robot applies commands 9 ms late).
+    Wraps a :class:`~actions.robot_interface.RobotInterface` (same orders; sensors and the
+    exact state pass through): a transport delay between the controller and the motor
+    drivers (legged_control's simulation of a Unitree robot applies commands 9 ms late).
+    Until the queue fills, the first command is applied. Sensor noise is the sensor model's
+    (:class:`sim.sensors.SensorModel`).
 
-    Attributes:
+    Args:
         robot: The robot.
-        position_noise_rad: Standard deviation of the joint-position noise [rad].
-        velocity_noise_rad_s: Standard deviation of the joint-velocity noise [rad/s].
-        delay_ticks: Control periods between a command and its application.
-        seed: Seed of the noise.
+        delay_ticks: Control periods between a command and its application, in [0, 100].
     """
 
-    robot: RobotInterface
-    position_noise_rad: float = 0.0
-    velocity_noise_rad_s: float = 0.0
-    delay_ticks: int = 0
-    seed: int = 0
-    _rng: np.random.Generator = field(init=False, repr=False)
-    _queue: deque = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        as_float("position_noise_rad", self.position_noise_rad, low=0.0, high=0.5)
-        as_float("velocity_noise_rad_s", self.velocity_noise_rad_s, low=0.0, high=50.0)
-        if isinstance(self.delay_ticks, bool) or not isinstance(self.delay_ticks, int) or not (
-                0 <= self.delay_ticks <= 100):
+    def __init__(self, robot: RobotInterface, delay_ticks: int):
+        if isinstance(delay_ticks, bool) or not isinstance(delay_ticks, int) or not (
+                0 <= delay_ticks <= 100):
             raise ConfigurationError(
-                f"delay_ticks: expected a whole number in [0, 100], received {self.delay_ticks!r}")
-        self._rng = np.random.default_rng(self.seed)
-        self._queue = deque()
+                f"delay_ticks: expected a whole number in [0, 100], received {delay_ticks!r}")
+        self.robot = robot
+        self.delay_ticks = delay_ticks
+        self._queue: deque[MotorCommand] = deque()
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -70,24 +57,13 @@ class NoisyDelayedRobot:
         """The robot's clock [s]."""
         return self.robot.time_s
 
-    def _add_noise(self, positions: np.ndarray, velocities: np.ndarray) -> None:
-        if self.position_noise_rad:
-            positions += self._rng.normal(0.0, self.position_noise_rad, len(positions))
-        if self.velocity_noise_rad_s:
-            velocities += self._rng.normal(0.0, self.velocity_noise_rad_s, len(velocities))
-
     def read_sensors(self) -> SensorRecord | None:
-        """The robot's sensor record with more noise on the joint positions and velocities."""
-        record = self.robot.read_sensors()
-        if record is not None:
-            self._add_noise(record.q, record.dq)
-        return record
+        """The robot's sensor record."""
+        return self.robot.read_sensors()
 
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """The robot's exact state with the same noise on the joints."""
-        q, v = self.robot.read_state()
-        self._add_noise(q[7:], v[6:])
-        return q, v
+        """The robot's exact state (simulators)."""
+        return self.robot.read_state()
 
     def write_command(self, command: MotorCommand) -> None:
         """Queue a command; the one from ``delay_ticks`` periods ago is applied."""

@@ -27,16 +27,26 @@ TRACKING_PHASES = frozenset(
 
 
 class TickRecorder:
-    """Per-tick arrays for ``--log`` and ``--plot``: what the controller saw and did, and
-    what MuJoCo measured during the tick."""
+    """Per-tick arrays for ``--log`` and ``--plot``: what the controller saw and did, what
+    MuJoCo measured during the tick, and the true state the controller's state estimated.
 
-    def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG):
+    ``q``, ``v`` are the controller's state (the estimate, unless ``--state truth``);
+    ``q_true``, ``v_true`` the simulator's exact state at the same instant;
+    ``estimate_contact`` the estimator's contact weight of each foot and ``estimate_flags``
+    its fault flags (``wbc.state_estimator``'s constants; 0 with ``--state truth``).
+    """
+
+    def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG,
+                 loop: ControlLoop | None = None):
         self.phase_of = phase_of
         self.leg = leg
         self._row = LEGS.index(leg)
         self.rows: dict[str, list[Any]] = {k: [] for k in (
-            "t_s", "q", "v", "tau", "foot_target", "foot_position", "phase",
-            "contact_forces", "com_margin_m", "qp_ok", "tick_us")}
+            "t_s", "q", "v", "q_true", "v_true", "estimate_contact", "estimate_flags", "tau",
+            "foot_target", "foot_position", "phase", "contact_forces", "com_margin_m",
+            "qp_ok", "tick_us")}
+        #: The truth at the instant the next tick's state describes (before its physics).
+        self._truth = None if loop is None else loop.true_state()
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         from sim.episode_metrics import LOADED_FORCE_N
@@ -56,6 +66,14 @@ class TickRecorder:
         row["t_s"].append(loop.context.now_s)
         row["q"].append(np.array(loop.context.q))
         row["v"].append(np.array(loop.context.v))
+        truth = self._truth or (loop.context.q, loop.context.v)
+        row["q_true"].append(np.array(truth[0]))
+        row["v_true"].append(np.array(truth[1]))
+        self._truth = loop.true_state()
+        estimate = None if loop.estimator is None else loop.estimator.estimate
+        row["estimate_contact"].append(np.ones(len(LEGS)) if estimate is None
+                                       else np.array(estimate.contact))
+        row["estimate_flags"].append(0 if estimate is None else estimate.flags)
         row["tau"].append(np.array(out.tau))
         row["foot_target"].append(np.full(3, np.nan) if target is None else np.array(target))
         row["foot_position"].append(feet[self._row])
@@ -123,7 +141,7 @@ def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None
     t = arrays["t_s"]
     leg = str(arrays["raised_leg"])
     fr = list(arrays["legs"]).index("FR")
-    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5), layout="constrained")
+    fig, axes = plt.subplots(5, 1, sharex=True, figsize=(9, 10.5), layout="constrained")
     ax = axes[0]
     ax.plot(t, arrays["foot_position"][:, 2], label=f"{leg} foot (MuJoCo)")
     ax.plot(t, arrays["foot_target"][:, 2], "--", label="target")
@@ -138,6 +156,14 @@ def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None
     ax.plot(t, arrays["contact_forces"][:, fr, 2])
     ax.set_ylabel("FR normal force [N]")
     ax = axes[3]
+    error_q = arrays["q"] - arrays["q_true"]
+    error_v = arrays["v"][:, :3] - arrays["v_true"][:, :3]
+    ax.plot(t, error_q[:, 2] * 1e3, label="base height [mm]")
+    ax.plot(t, np.linalg.norm(error_v, axis=1) * 1e2, label="|base velocity| [cm/s]")
+    ax.axhline(0.0, color="0.5", lw=0.6)
+    ax.set_ylabel("estimate - truth")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[4]
     ax.plot(t, arrays["tick_us"], lw=0.5)
     ax.axhline(1e3, color="tab:red", lw=0.8, ls=":", label="1 kHz period")
     ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others

@@ -39,7 +39,7 @@ from wbc.description import LEGS
 from wbc.errors import ConfigurationError
 from wbc.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, rotate_inverse
 from wbc.sensor_record import SensorRecord
-from wbc.validation import as_float, check_name
+from wbc.validation import as_float, check_name, known_fields_only
 
 if TYPE_CHECKING:
     from sim.simulator import Go2Simulator
@@ -52,6 +52,7 @@ _CHANNELS = 52
 _GRAVITY = 9.81
 
 
+@known_fields_only("sensor parameter")
 @dataclass(frozen=True)
 class SensorModel:
     """The simulated GO2's sensors: noise, biases, resolution and scale of each signal.

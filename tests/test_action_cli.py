@@ -54,7 +54,9 @@ def test_send_goal_prints_the_goal_id_acceptance_feedback_and_result(high_five):
     code, out = high_five
     assert code == EXIT_SUCCEEDED, out
     lines = out.splitlines()
-    assert lines[1:3] == ["Waiting for an action server to become available...",
+    assert lines[0].startswith("state: estimated (linear Kalman filter") and lines[1].startswith(
+        "plant menagerie")
+    assert lines[2:4] == ["Waiting for an action server to become available...",
                           "Sending goal:"]
     assert section(out, "Sending goal") == {"target_height": 0.3, "hold_seconds": 0}
     assert "\nGoal accepted with ID: 1\n" in out

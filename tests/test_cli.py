@@ -29,13 +29,19 @@ from sim.cli import (
     main,
 )
 from sim.plant import Plant
+from sim.sensor_faults import FAULT_KINDS
 from sim.trajectory_file import load_trajectory_goal
 from wbc.description import JOINT_NAMES, LEGS
 
 HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading",
                     "shifting_back", "complete"]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-#: The first line of a run on the default plant and rates.
+#: The first line of a run: the state source and the default sensors.
+STATE_LINE = (
+    "state: estimated (linear Kalman filter, IMU and leg kinematics) from sensors go2 (gyro "
+    "0.004 rad/s, accel 0.03 m/s^2, attitude filter 5 s; joints 5e-05 rad / 0.02 rad/s; feet "
+    "2.5 counts/N), seed 0")
+#: The second line of a run on the default plant and rates.
 MENAGERIE_LINE = (
     "plant menagerie (joints: damping 2 N m s/rad, friction loss 0.2 N m, armature 0.01 "
     "kg m^2; feet: friction 0.8, condim 6, elliptic cones, impratio 100); control 1000 Hz, "
@@ -103,6 +109,7 @@ def high_five(tmp_path_factory: pytest.TempPathFactory) -> dict:
 def test_high_five_succeeds_and_prints_each_phase_once_then_the_result(high_five):
     assert high_five["code"] == EXIT_SUCCEEDED
     lines = high_five["out"].splitlines()
+    assert lines.pop(0) == STATE_LINE
     assert lines.pop(0) == MENAGERIE_LINE
     assert lines[0] == (f"[{SETTLE_S:7.3f} s] high_five: sending goal "
                         "(target_height 0.40 m, hold 0 s)")
@@ -114,7 +121,11 @@ def test_high_five_succeeds_and_prints_each_phase_once_then_the_result(high_five
     assert lines[10].endswith("result: SUCCEEDED: high five done: foot raised to 0.400 m, "
                               "held 0 s, back on four feet")
     assert lines[11].startswith("metrics: raised foot error RMS ")
-    assert lines[12:] == [f"wrote {high_five['paths'][k]}" + suffix for k, suffix in
+    assert re.fullmatch(r"estimate vs truth: base velocity error RMS \d\.\d mm/s \(max "
+                        r"\d+\.\d\); height error max \d\.\d\d mm; roll / pitch error max "
+                        r"0\.\d\d / 0\.\d\d deg; drift \d\.\d mm horizontal, -?0\.\d\d deg "
+                        r"yaw", lines[12]), lines[12]
+    assert lines[13:] == [f"wrote {high_five['paths'][k]}" + suffix for k, suffix in
                           (("report", ""), ("log", " (5806 ticks)"), ("plot", ""))]
 
 
@@ -125,6 +136,11 @@ def test_report_has_the_result_phases_in_order_and_the_feedback(high_five):
     plant = json.loads(json.dumps(dataclasses.asdict(Plant.preset("menagerie"))))
     assert report["plant"] == plant and report["plant"]["name"] == "menagerie"
     assert report["control_rate_hz"] == 1000.0 and report["physics_timestep_s"] == 0.001
+    state = report["state"]
+    assert state["source"] == "estimate" and state["sensors"]["name"] == "go2"
+    assert state["sensors"]["gyro_noise_rad_s"] == 0.004 and state["sensor_seed"] == 0
+    assert state["estimator"]["trust_timeout_s"] == 0.01 and state["command_delay_s"] == 0.0
+    assert state["sensor_faults"] == []
     assert report["result"] == {
         "status": "SUCCEEDED", "success": True,
         "message": "high five done: foot raised to 0.400 m, held 0 s, back on four feet"}
@@ -157,6 +173,8 @@ def test_report_metrics_meet_the_controller_goals(high_five):
     assert m["max_base_tilt_deg"] < 3.0 and not m["fell"]
     assert m["max_torque_fraction"] <= 0.9
     assert m["qp_failures"] == 0
+    assert 0 < m["estimate_velocity_rms_m_s"] <= 0.02 and 0 < m["estimate_height_max_mm"] <= 3.0
+    assert m["estimate_roll_max_deg"] <= 0.3 and m["estimate_pitch_max_deg"] <= 0.3
     assert 0 < m["tick_median_us"] <= m["tick_p99_us"] <= m["tick_max_us"]
     assert m["real_time_factor"] > 0
 
@@ -164,14 +182,23 @@ def test_report_metrics_meet_the_controller_goals(high_five):
 def test_log_has_one_row_per_tick_with_consistent_arrays(high_five):
     log = np.load(high_five["paths"]["log"])
     n = 5806
-    shapes = {"t_s": (n,), "q": (n, 19), "v": (n, 18), "tau": (n, 12), "foot_target": (n, 3),
-              "foot_position": (n, 3), "phase": (n,), "contact_forces": (n, 4, 3),
-              "com_margin_m": (n,), "qp_ok": (n,), "tick_us": (n,)}
+    shapes = {"t_s": (n,), "q": (n, 19), "v": (n, 18), "q_true": (n, 19), "v_true": (n, 18),
+              "estimate_contact": (n, 4), "estimate_flags": (n,), "tau": (n, 12),
+              "foot_target": (n, 3), "foot_position": (n, 3), "phase": (n,),
+              "contact_forces": (n, 4, 3), "com_margin_m": (n,), "qp_ok": (n,),
+              "tick_us": (n,)}
     assert {k: log[k].shape for k in shapes} == shapes
     assert list(log["joint_names"]) == list(JOINT_NAMES)
     assert list(log["legs"]) == list(LEGS) and str(log["raised_leg"]) == "FR"
     assert np.allclose(np.diff(log["t_s"]), 1e-3) and log["t_s"][0] == pytest.approx(SETTLE_S)
     assert np.allclose(np.linalg.norm(log["q"][:, 3:7], axis=1), 1.0)
+    # The controller's state is the estimate, beside the truth at the same instants.
+    assert np.abs(log["q"][:, 2] - log["q_true"][:, 2]).max() <= 3e-3
+    assert np.abs(log["v"][:, :3] - log["v_true"][:, :3]).max() <= 0.03
+    assert not np.array_equal(log["q"], log["q_true"])
+    assert not log["estimate_flags"].any()
+    fr = LEGS.index("FR")  # in the air while holding: no weight in the filter
+    assert np.all(log["estimate_contact"][log["phase"] == "ready", fr] == 0.0)
     phases = list(dict.fromkeys(log["phase"]))
     assert phases == HIGH_FIVE_PHASES
     tracking = np.isin(log["phase"], ["raising", "ready", "lowering"])
@@ -423,7 +450,7 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
                      "payload_offset_m=0.05,0,0", "--control-rate", "500", "--report",
                      str(report)])
     assert code == EXIT_SUCCEEDED, out
-    first = out.splitlines()[0]
+    first = out.splitlines()[1]
     assert first.startswith("plant identified + calf_friction_loss=1.4, "
                             "payload_offset_m=(0.05, 0, 0) (hip: damping 0.2")
     assert "calf: damping 0.2 N m s/rad, friction loss 1.4 N m" in first
@@ -464,11 +491,63 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
       "number of physics steps of 0.001 s (e.g. 0.001, 0.002, 0.004 s), received "
       "0.00333333 s")),
     (["--control-rate", "0"], "--control-rate: expected a rate in [10, 10000] Hz, received 0"),
+    (["--state", "exact"], "--state: invalid choice: 'exact' (choose from 'estimate', 'truth')"),
+    (["--sensors", "perfect"], ("--sensors: invalid choice: 'perfect' (choose from 'go2', "
+                                "'exact')")),
+    (["--sensor-param", "gyro=1"],
+     ("--sensor-param: unknown sensor parameter 'gyro'; valid sensor parameters: "
+      "gyro_noise_rad_s, gyro_bias_rad_s, gyro_bias_walk, accel_noise_m_s2, accel_bias_m_s2, "
+      "accel_bias_walk, attitude_time_constant_s, joint_position_noise_rad, "
+      "joint_position_resolution_rad, joint_velocity_noise_rad_s, joint_torque_noise_nm, "
+      "foot_force_offset, foot_force_gain, foot_force_noise, foot_force_full_scale, "
+      "foot_force_integer")),
+    (["--sensor-param", "gyro_noise_rad_s=nan"],
+     "--sensor-param: gyro_noise_rad_s: expected a finite number, received nan"),
+    (["--sensor-param", "gyro_noise_rad_s=high"],
+     "--sensor-param: gyro_noise_rad_s: expected a number, received 'high'"),
+    (["--sensor-fault", "blackout,1,0.1"],
+     ("--sensor-fault: unknown sensor fault 'blackout'; valid sensor faults: "
+      + ", ".join(FAULT_KINDS))),
+    (["--sensor-fault", "dropout,1"],
+     ("--sensor-fault: expected KIND,AT_S,DURATION_S[,FOOT_OR_JOINT] with KIND one of "
+      + ", ".join(FAULT_KINDS) + " (e.g. dropout,3.5,0.02 or foot_zero,1,5,RL), received "
+      "'dropout,1'")),
+    (["--sensor-fault", "foot_zero,1,0.1,XL"],
+     "--sensor-fault: unknown leg 'XL'; valid legs: FL, FR, RL, RR"),
+    (["--command-delay", "0.0025"],
+     ("--command-delay: expected a whole number of control periods of 0.001 s (e.g. 0.001, "
+      "0.009), received 0.0025")),
 ])
 def test_bad_plant_and_rate_options_are_one_line_usage_errors(argv, message, capsys):
     prog = "go2-wbc high-five"
     line = usage_error(["high-five", *argv], capsys)
     assert line == f"{prog}: error: {message} (see '{prog} --help')"
+
+
+def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
+    code, out = run(["high-five", "--hold", "0", "--state", "truth", "--sensors", "exact",
+                     "--metrics"])
+    assert code == EXIT_SUCCEEDED, out
+    lines = out.splitlines()
+    assert lines[0] == ("state: the simulator's exact state (--state truth; a GO2 measures no "
+                        "base position or velocity); sensors exact (the true state, no noise) "
+                        "unused")
+    assert "estimate vs truth" not in out
+    report = tmp_path / "fault.json"
+    code, out = run(["high-five", "--hold", "1", "--sensor-fault", "dropout,3.3,0.02",
+                     "--sensor-param", "gyro_noise_rad_s=0.01", "--command-delay", "0.002",
+                     "--report", str(report)])
+    assert code == EXIT_NOT_SUCCEEDED, out
+    lines = out.splitlines()
+    assert lines[0].endswith("seed 0; fault: no sample arrives from 3.3 s for 20 ms")
+    assert "gyro 0.01 rad/s" in lines[0]
+    assert lines[1].endswith("; commands applied 2 ms late")
+    assert ("result: ABORTED: aborted: controller fault (state estimate: no trustworthy sensor "
+            "sample for 11 ms (limit 10 ms): no sensor sample this period)") in out
+    state = json.loads(report.read_text())["state"]
+    assert state["sensor_faults"] == [{"kind": "dropout", "at_s": 3.3, "duration_s": 0.02,
+                                       "name": ""}]
+    assert state["command_delay_s"] == 0.002 and state["sensors"]["gyro_noise_rad_s"] == 0.01
 
 
 def test_stand_pd_checks_the_plant_and_rate_options_too(capsys):

@@ -5,7 +5,9 @@ import pytest
 
 from actions import BusyPolicy, GoalRejectedError, GoalStatus, HighFiveGoal
 from actions.high_five_behaviour import (
-    INVALID_HOLD_SECONDS, INVALID_TARGET_HEIGHT, ROBOT_NOT_READY,
+    INVALID_HOLD_SECONDS,
+    INVALID_TARGET_HEIGHT,
+    ROBOT_NOT_READY,
 )
 from actions.messages import StandGoal
 from actions.robot_context import tilt_deg

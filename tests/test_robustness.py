@@ -11,6 +11,7 @@ import pytest
 from actions import GoalStatus, HighFiveGoal
 from actions.action_runner import ActionRunner
 from actions.messages import StandGoal
+from actions.robot_context import tilt_deg
 from benchmarks import robustness
 from benchmarks.robustness import (
     DIRECTIONS_DEG,
@@ -24,7 +25,6 @@ from benchmarks.robustness import (
     run_high_five,
     standing_on_four_feet,
 )
-from actions.robot_context import tilt_deg
 from sim.control_loop import ControlLoop
 from sim.sensor_faults import FaultyRobot, SensorFault
 from wbc.backends import QpProblem, QpResult, register_backend

@@ -148,7 +148,7 @@ def test_built_in_sweeps_and_the_example_files_load():
     ({"height_m": 0.9}, "height_m: expected a value in [0.1, 0.5], received 0.9"),
     ({"metrics": "yes"}, "metrics: expected true or false, received 'yes'"),
     ({"holds": 1}, ("holds: unknown field; valid fields: height_m, hold_s, seed, metrics, "
-                    "pushes, plant, gains")),
+                    "pushes, plant, sensors, gains")),
     ({"plant": [1, 2]}, "plant: expected a mapping of name: values, received [1, 2]"),
 ])
 def test_a_bad_spec_raises_one_error_naming_the_field(document, message):

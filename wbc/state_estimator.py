@@ -58,7 +58,7 @@ from wbc.quaternion_kernels import (
     quat_yaw,
 )
 from wbc.sensor_record import SensorRecord
-from wbc.validation import as_float, as_vector
+from wbc.validation import as_float, as_vector, known_fields_only
 
 # Fault flags of one tick (the kernel's return value).
 STALE, NO_DATA, QUATERNION_NON_FINITE, QUATERNION_NOT_UNIT = 1, 2, 4, 8
@@ -68,6 +68,8 @@ QUATERNION_TIMEOUT = 256
 UNTRUSTED = STALE | NO_DATA | GYRO_BAD | JOINTS_BAD | QUATERNION_TIMEOUT
 # Why a foot sensor is distrusted.
 FOOT_OK, FOOT_STUCK, FOOT_SATURATED, FOOT_NON_FINITE = 0, 1, 2, 3
+#: The flags carry each foot's reason, two bits a foot (``LEGS`` order), from this bit on.
+FOOT_REASON_SHIFT = 16
 _FOOT_REASONS = {FOOT_STUCK: "stuck at {value:g}", FOOT_SATURATED: "at full scale ({value:g})",
                  FOOT_NON_FINITE: "non-finite ({value})"}
 
@@ -83,6 +85,7 @@ _LAST_TICK, _LAST_STAMP, _UNTRUSTED_S = 0, 1, 2
 _GRAVITY = 9.81
 
 
+@known_fields_only("estimator parameter")
 @dataclass(frozen=True)
 class EstimatorConfig:
     """Every number of the estimator, validated (an error names the field and its range).
@@ -292,8 +295,9 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
     values for ``recover_s`` [s]; the schedule alone then decides for that foot.
 
     Returns:
-        :data:`FOOT_SENSOR` if a foot sensor is distrusted, else 0. ``foot_*`` are the
-        sensors' state (in/out), ``weight`` (4,) the output.
+        :data:`FOOT_SENSOR` if a foot sensor is distrusted, else 0, with each foot's reason
+        in two bits from :data:`FOOT_REASON_SHIFT`. ``foot_*`` are the sensors' state
+        (in/out), ``weight`` (4,) the output.
     """
     flags = 0
     for i in range(4):
@@ -326,7 +330,7 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
                 elif value < force_off:
                     foot_contact[i] = 0.0
         if foot_reason[i] != FOOT_OK:
-            flags |= FOOT_SENSOR
+            flags |= FOOT_SENSOR | (foot_reason[i] << (FOOT_REASON_SHIFT + 2 * i))
         if use_force and foot_reason[i] == FOOT_OK:
             weight[i] = scheduled * foot_contact[i]
         else:
@@ -709,7 +713,7 @@ class StateEstimator:
         self._input = SensorRecord.zeros()
         self._schedule = np.zeros(4)
         self._fresh = True
-        self._faults_key: tuple[int, tuple[int, ...]] = (0, (0, 0, 0, 0))
+        self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
 
@@ -752,7 +756,7 @@ class StateEstimator:
         self._foot_last[:] = np.nan
         # The record itself is the first sample.
         self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0)
-        self._faults_key = (0, (0, 0, 0, 0))
+        self._described = 0
         self.estimate.faults = ""
         self.started = True
         self._schedule[:] = np.inf  # four loaded feet
@@ -800,10 +804,10 @@ class StateEstimator:
         estimate.flags = flags
         estimate.trusted = not flags & UNTRUSTED
         estimate.untrusted_s = float(self._clock[_UNTRUSTED_S])
-        estimate.usable = estimate.untrusted_s <= self.config.trust_timeout_s
-        key = (flags, tuple(self._foot_reason.tolist()))
-        if key != self._faults_key:
-            self._faults_key = key
+        # (A tolerance for the sum of periods: ten 1 ms ticks are 10 ms, not 10.000000000002.)
+        estimate.usable = estimate.untrusted_s <= self.config.trust_timeout_s + 1e-9
+        if flags != self._described:  # the text is built when what it says changes
+            self._described = flags
             estimate.faults = self.describe(flags)
         return estimate
 
@@ -821,6 +825,7 @@ class StateEstimator:
             self._foot_last, self._joint_q, self._joint_dq, estimate.q, estimate.v,
             estimate.contact, self._work)
         compiled = bind_compiled(_estimate, True, 0.0, 0.0, *arrays).func
+        self._tick_arrays = arrays
 
         def tick() -> int:
             return compiled(self._fresh, float(record.tick), record.stamp_s, *arrays)

@@ -39,8 +39,13 @@ Joint orders (always mapped by name through :meth:`wbc.joint_map.JointMap.unitre
   RL (SDK leg order).
 
 Not kept: ``imu_state.rpy`` (the quaternion's angles), ``motor_state[i].ddq``, and the
-base position and linear velocity, which the robot does not measure: a state estimator
-provides them to :meth:`SdkLowState.to_pinocchio`.
+base position and linear velocity, which the robot does not measure: the state estimator
+(:class:`wbc.StateEstimator`) provides them from :meth:`SdkLowState.sensor_record` (or
+:func:`sensor_record_from_message`, which lets a failing sensor's NaN through to it)::
+
+    estimator.reset(sensor_record_from_message(first_low_state))
+    estimate = estimator.update(sensor_record_from_message(low_state), bounds)
+    out = controller.step(estimate.q, estimate.v)
 """
 
 from __future__ import annotations
@@ -56,6 +61,7 @@ from wbc.description import JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES, UNITREE_
 from wbc.errors import ConfigurationError
 from wbc.joint_map import JointMap
 from wbc.motor_command import MotorCommand
+from wbc.sensor_record import SensorRecord
 from wbc.validation import as_vector, check_name
 
 #: ``motor_cmd[i].mode`` of a motor that follows its command.
@@ -299,6 +305,8 @@ class SdkLowState:
     tau_est: np.ndarray
     #: Raw foot force readings (4,), legs FR, FL, RR, RL.
     foot_force: np.ndarray
+    #: The robot's sample counter (``LowState_.tick``); 0 when not known.
+    tick: int = 0
 
     def __post_init__(self) -> None:
         self.imu_quaternion_wxyz = as_vector("imu_quaternion_wxyz", self.imu_quaternion_wxyz, 4)
@@ -309,6 +317,10 @@ class SdkLowState:
         self.dq = as_vector("dq", self.dq, SDK_LEG_MOTORS)
         self.tau_est = as_vector("tau_est", self.tau_est, SDK_LEG_MOTORS)
         self.foot_force = as_vector("foot_force", self.foot_force, len(UNITREE_SDK_LEGS))
+        if isinstance(self.tick, bool) or not isinstance(self.tick, (int, np.integer)):
+            raise ConfigurationError(
+                f"tick: expected a whole number (LowState_.tick), received {self.tick!r}")
+        self.tick = int(self.tick)
 
     @classmethod
     def from_message(cls, low_state: Any) -> SdkLowState:
@@ -325,7 +337,7 @@ class SdkLowState:
                 imu_quaternion_wxyz=imu.quaternion, gyroscope_rad_s=imu.gyroscope,
                 accelerometer_m_s2=imu.accelerometer, q=[m.q for m in motors],
                 dq=[m.dq for m in motors], tau_est=[m.tau_est for m in motors],
-                foot_force=low_state.foot_force,
+                foot_force=low_state.foot_force, tick=int(getattr(low_state, "tick", 0)),
             )
         except (AttributeError, IndexError, TypeError) as err:
             raise ConfigurationError(
@@ -362,6 +374,19 @@ class SdkLowState:
         qpos = np.concatenate([p, quat, _SDK.from_other(self.q)])
         qvel = np.concatenate([vel, self.gyroscope_rad_s, _SDK.from_other(self.dq)])
         return mujoco_to_pin(qpos, qvel)
+
+    def sensor_record(self, stamp_s: float | None = None) -> SensorRecord:
+        """The same sample as a :class:`wbc.SensorRecord` in the description's orders
+        (joints FL, FR, RL, RR x hip, thigh, calf; feet FL, FR, RL, RR), mapped by name:
+        what :class:`wbc.StateEstimator` takes.
+
+        Args:
+            stamp_s: When it was taken [s]; by default ``tick`` read as milliseconds (the
+                estimator falls back to its control period when stamps give no plausible
+                step).
+        """
+        return _record(self.imu_quaternion_wxyz, self.gyroscope_rad_s, self.accelerometer_m_s2,
+                       self.q, self.dq, self.tau_est, self.foot_force, self.tick, stamp_s)
 
     def foot_forces_by_leg(self) -> dict[str, float]:
         """The raw foot force readings by leg, in the description's leg order (FL, FR, RL, RR)."""
@@ -426,3 +451,48 @@ class SdkLowState:
             dq=_SDK.to_other(v[6:]), tau_est=_SDK.to_other(tau),
             foot_force=[feet[LEGS.index(leg)] for leg in UNITREE_SDK_LEGS],
         )
+
+
+#: Each description leg's slot in the SDK's foot order.
+_SDK_LEG_SLOTS = np.array([UNITREE_SDK_LEGS.index(leg) for leg in LEGS])
+
+
+def _record(quaternion: Any, gyroscope: Any, accelerometer: Any, q: Any, dq: Any, tau: Any,
+            feet: Any, tick: int, stamp_s: float | None) -> SensorRecord:
+    joints = _SDK.inverse
+    return SensorRecord(
+        stamp_s=tick * 1e-3 if stamp_s is None else stamp_s, tick=tick,
+        imu_quaternion_wxyz=quaternion, gyroscope_rad_s=gyroscope,
+        accelerometer_m_s2=accelerometer, q=np.asarray(q, dtype=float)[joints],
+        dq=np.asarray(dq, dtype=float)[joints], tau_est=np.asarray(tau, dtype=float)[joints],
+        foot_force=np.asarray(feet, dtype=float)[_SDK_LEG_SLOTS])
+
+
+def sensor_record_from_message(low_state: Any, *, stamp_s: float | None = None) -> SensorRecord:
+    """A ``LowState_`` (or anything with its attributes) as a :class:`wbc.SensorRecord` in
+    the description's orders, for the state estimator.
+
+    Unlike :meth:`SdkLowState.from_message`, non-finite readings pass through: a failing
+    sensor is the estimator's to detect, report and work around, not a reason to stop the
+    control loop. Missing attributes and wrong sizes still raise.
+
+    Args:
+        low_state: The message.
+        stamp_s: When it was received [s]; by default its ``tick`` read as milliseconds.
+
+    Raises:
+        ConfigurationError: A missing attribute or a field of the wrong size (named).
+    """
+    try:
+        imu = low_state.imu_state
+        motors = [low_state.motor_state[k] for k in range(SDK_LEG_MOTORS)]
+        return _record(imu.quaternion, imu.gyroscope, imu.accelerometer,
+                       [m.q for m in motors], [m.dq for m in motors],
+                       [m.tau_est for m in motors], low_state.foot_force,
+                       int(getattr(low_state, "tick", 0)), stamp_s)
+    except (AttributeError, IndexError, TypeError) as err:
+        raise ConfigurationError(
+            f"low_state: expected a LowState_ (imu_state.quaternion, .gyroscope, "
+            f".accelerometer; motor_state[0..{SDK_LEG_MOTORS - 1}].q, .dq, .tau_est; "
+            f"foot_force), received {type(low_state).__name__}: {err}"
+        ) from err

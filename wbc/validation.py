@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
-from collections.abc import Iterable
-from typing import Any
+from collections.abc import Callable, Iterable
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -83,3 +85,29 @@ def check_name(kind: str, name: str, valid: Iterable[str]) -> str:
             f"unknown {kind} {name!r}; valid {kind}s: {', '.join(valid)}"
         )
     return name
+
+
+_Class = TypeVar("_Class", bound=type)
+
+
+def known_fields_only(kind: str) -> Callable[[_Class], _Class]:
+    """Class decorator for a dataclass: an unknown keyword raises :class:`UnknownNameError`
+    naming it and listing the valid fields (instead of Python's bare ``TypeError``).
+
+    Args:
+        kind: What a field is called in the message (``"sensor parameter"``).
+    """
+    def decorate(cls: _Class) -> _Class:
+        init = cls.__init__
+        names = tuple(f.name for f in dataclasses.fields(cls))
+
+        @functools.wraps(init)
+        def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
+            for key in kwargs:
+                check_name(kind, key, names)
+            init(self, *args, **kwargs)
+
+        cls.__init__ = __init__  # type: ignore[method-assign]
+        return cls
+
+    return decorate

@@ -1,0 +1,313 @@
+"""The state estimator on synthetic sensor records: statics, bias, contact fusion, faults, errors."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from numba.core.runtime import _nrt_python, rtsys
+
+from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
+from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.sensor_record import SensorRecord
+from wbc.state_estimator import (
+    FOOT_SENSOR,
+    JOINTS_BAD,
+    NO_DATA,
+    QUATERNION_NON_FINITE,
+    QUATERNION_NOT_UNIT,
+    STALE,
+    EstimatorConfig,
+    StateEstimator,
+)
+from wbc.unitree_sdk import SdkLowState, sensor_record_from_message
+
+LOADED = np.full(4, 200.0)  # the contact schedule of four loaded feet [N]
+LOADED_COUNT = 110.0  # a foot sensor's count under about 40 N
+
+
+def pose(yaw_deg: float = 0.0) -> np.ndarray:
+    q = Go2Description.default().pose("standing")
+    q[3:7] = pin.Quaternion(pin.rpy.rpyToMatrix(0.0, 0.0, math.radians(yaw_deg))).coeffs()
+    return q
+
+
+def record(q: np.ndarray, *, tick: int, period_s: float = 1e-3, gyro=(0.0, 0.0, 0.0),
+           feet=None) -> SensorRecord:
+    """What a GO2 at rest in configuration ``q`` measures: noise-free but for the foot
+    counts, which a live sensor's noise changes (by default 108 to 112 on every foot)."""
+    if feet is None:
+        feet = LOADED_COUNT + (tick % 5) - 2
+    x, y, z, w = q[3:7]
+    rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
+    return SensorRecord(
+        stamp_s=tick * period_s, tick=tick, imu_quaternion_wxyz=[w, x, y, z],
+        gyroscope_rad_s=gyro, accelerometer_m_s2=rotation.T @ [0.0, 0.0, 9.81],
+        q=q[7:], dq=np.zeros(12), tau_est=np.zeros(12), foot_force=np.full(4, feet, float))
+
+
+def expected_height(q: np.ndarray) -> float:
+    """The base height that puts the feet's sphere centres at one radius above the floor."""
+    model = Go2Description.default().model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    feet = [data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation[2] for leg in LEGS]
+    return float(q[2] + FOOT_RADIUS_M - np.mean(feet))
+
+
+def started(q: np.ndarray | None = None, **overrides) -> StateEstimator:
+    estimator = StateEstimator(**overrides)
+    estimator.reset(record(pose() if q is None else q, tick=0))
+    return estimator
+
+
+def run(estimator: StateEstimator, q: np.ndarray, ticks: int, first_tick: int = 1, **kwargs):
+    for tick in range(first_tick, first_tick + ticks):
+        estimate = estimator.update(record(q, tick=tick, **kwargs), LOADED)
+    return estimate
+
+
+# ---------------------------------------------------------------------------- statics
+
+
+def test_a_robot_at_rest_is_estimated_at_rest_where_its_feet_put_it():
+    q = pose()
+    estimator = started(q)
+    estimate = run(estimator, q, 2000)
+    assert estimate.trusted and estimate.usable and estimate.faults == ""
+    np.testing.assert_allclose(estimate.q[:2], [0.0, 0.0], atol=1e-9)
+    assert estimate.q[2] == pytest.approx(expected_height(q), abs=1e-6)
+    np.testing.assert_allclose(estimate.q[3:7], q[3:7], atol=1e-9)
+    np.testing.assert_array_equal(estimate.q[7:], q[7:])
+    np.testing.assert_allclose(estimate.v, np.zeros(18), atol=1e-9)
+    np.testing.assert_array_equal(estimate.contact, np.ones(4))
+
+
+def test_the_world_starts_with_the_heading_at_zero_unless_told_to_keep_it():
+    q = pose(yaw_deg=30.0)
+    estimate = StateEstimator().reset(record(q, tick=0), base_xy=(1.0, -2.0))
+    np.testing.assert_allclose(estimate.q[3:7], pose()[3:7], atol=1e-12)
+    np.testing.assert_allclose(estimate.q[:2], [1.0, -2.0], atol=1e-12)
+    kept = StateEstimator().reset(record(q, tick=0), keep_yaw=True)
+    np.testing.assert_allclose(kept.q[3:7], q[3:7], atol=1e-12)
+
+
+def test_a_gyroscope_bias_is_learnt_and_leaves_no_tilt():
+    q = pose()
+    bias = np.array([0.01, -0.02, 0.005])  # rad/s: 0.6 to 1.1 deg/s
+    estimator = started(q)
+    estimate = run(estimator, q, 60_000, gyro=bias)
+    np.testing.assert_allclose(estimator.gyro_bias, bias, atol=2e-4)
+    np.testing.assert_allclose(estimate.v[3:6], np.zeros(3), atol=2e-4)
+    # The IMU's quaternion (level) is followed: the bias tilts the estimate by bias * 0.05 s
+    # at first, and not at all once learnt.
+    np.testing.assert_allclose(estimate.q[3:7], q[3:7], atol=1e-5)
+
+
+# ---------------------------------------------------------------------------- contact
+
+
+def test_a_foot_the_sensor_calls_unloaded_or_the_schedule_lifts_has_no_weight():
+    q = pose()
+    estimator = started(q)
+    unloaded = record(q, tick=1)
+    unloaded.foot_force[1] = 20.0  # FR: below the 40-count release threshold
+    estimate = estimator.update(unloaded, LOADED)
+    np.testing.assert_array_equal(estimate.contact, [1.0, 0.0, 1.0, 1.0])
+    again = record(q, tick=2)
+    again.foot_force[1] = 50.0  # between the thresholds: still released (hysteresis)
+    assert estimator.update(again, LOADED).contact[1] == 0.0
+    again = record(q, tick=3)  # about 110 counts: in contact again
+    assert estimator.update(again, LOADED).contact[1] == 1.0
+    ramp = LOADED.copy()
+    ramp[2] = 15.0  # RL's bound ramped to 15 N: half the schedule's trust
+    np.testing.assert_allclose(estimator.update(record(q, tick=4), ramp).contact,
+                               [1.0, 1.0, 0.5, 1.0])
+    swing = LOADED.copy()
+    swing[3] = 0.0
+    assert estimator.update(record(q, tick=5), swing).contact[3] == 0.0
+
+
+def test_schedule_only_mode_ignores_the_foot_sensors():
+    q = pose()
+    estimator = started(q, use_foot_force=False)
+    silent = record(q, tick=1, feet=0.0)  # no foot sensors: zeros
+    np.testing.assert_array_equal(estimator.update(silent, LOADED).contact, np.ones(4))
+    assert estimator.estimate.faults == ""
+
+
+# ---------------------------------------------------------------------------- faults
+
+
+def test_stale_and_missing_samples_are_untrusted_and_unusable_after_the_timeout():
+    q = pose()
+    estimator = started(q)  # trust_timeout_s 0.01: ten 1 ms ticks
+    run(estimator, q, 10)
+    repeated = record(q, tick=10)
+    for k in range(10):
+        estimate = estimator.update(repeated, LOADED)
+        assert estimate.flags & STALE and not estimate.trusted and estimate.usable, k
+    assert estimate.faults == "stale sample (tick 10 repeated)"
+    estimate = estimator.update(None, LOADED)
+    assert estimate.flags & NO_DATA and not estimate.usable
+    assert estimate.untrusted_s == pytest.approx(0.011)
+    assert estimate.faults == "no sensor sample this period"
+    estimate = estimator.update(record(q, tick=11), LOADED)
+    assert estimate.trusted and estimate.usable and estimate.faults == ""
+    assert estimate.q[2] == pytest.approx(expected_height(q), abs=1e-6)
+
+
+def test_a_bad_quaternion_is_reported_and_the_gyroscope_carries_the_orientation():
+    q = pose()
+    estimator = started(q)
+    run(estimator, q, 10)
+    bad = record(q, tick=11)
+    bad.imu_quaternion_wxyz[:] = np.nan
+    estimate = estimator.update(bad, LOADED)
+    assert estimate.flags & QUATERNION_NON_FINITE and estimate.trusted and estimate.usable
+    assert estimate.faults.startswith("IMU quaternion non-finite ([nan, nan, nan, nan]): "
+                                      "orientation from the gyroscope")
+    np.testing.assert_allclose(estimate.q[3:7], q[3:7], atol=1e-9)
+    long = record(q, tick=12)
+    long.imu_quaternion_wxyz *= 1.5
+    estimate = estimator.update(long, LOADED)
+    assert estimate.flags & QUATERNION_NOT_UNIT
+    assert "IMU quaternion not unit (norm 1.5, tolerance 0.01)" in estimate.faults
+    np.testing.assert_allclose(estimate.q[3:7], q[3:7], atol=1e-9)
+
+
+def test_non_finite_joints_make_the_sample_untrusted_and_keep_the_last_good_joints():
+    q = pose()
+    estimator = started(q)
+    bad = record(q, tick=1)
+    bad.q[4] = np.nan
+    estimate = estimator.update(bad, LOADED)
+    assert estimate.flags & JOINTS_BAD and not estimate.trusted
+    assert estimate.faults == "joint readings non-finite at [4]"
+    np.testing.assert_array_equal(estimate.q[7:], q[7:])
+    assert np.all(np.isfinite(estimate.q)) and np.all(np.isfinite(estimate.v))
+
+
+@pytest.mark.parametrize(("reading", "words"), [
+    (1000.0, "FR foot-force sensor at full scale (1000): contact from the schedule"),
+    (0.0, "FR foot-force sensor stuck at 0: contact from the schedule")])
+def test_a_broken_foot_sensor_is_distrusted_then_trusted_again(reading, words):
+    q = pose()
+    estimator = started(q)
+    rng = np.random.default_rng(1)
+    tick = 0
+    for _ in range(60):  # 60 ms of the same reading on a loaded foot
+        tick += 1
+        broken = record(q, tick=tick, feet=LOADED_COUNT + rng.integers(-3, 4))
+        broken.foot_force[1] = reading
+        estimate = estimator.update(broken, LOADED)
+    assert estimate.flags & FOOT_SENSOR and estimate.faults == words
+    assert estimate.contact[1] == 1.0  # the schedule's: loaded
+    for _ in range(499):  # changing, in-range readings: trusted again after 0.5 s
+        tick += 1
+        estimate = estimator.update(record(q, tick=tick, feet=LOADED_COUNT + tick % 5), LOADED)
+    assert estimate.flags & FOOT_SENSOR
+    tick += 1
+    estimate = estimator.update(record(q, tick=tick, feet=LOADED_COUNT), LOADED)
+    assert not estimate.flags and estimate.faults == ""
+
+
+def test_a_foot_in_the_air_may_read_a_steady_value():
+    q = pose()
+    estimator = started(q)
+    swing = LOADED.copy()
+    swing[1] = 0.0
+    for tick in range(1, 200):
+        sample = record(q, tick=tick)
+        sample.foot_force[1] = 10.0  # FR, in the air
+        estimate = estimator.update(sample, swing)
+    assert not estimate.flags & FOOT_SENSOR
+
+
+def test_the_tick_allocates_nothing_in_compiled_code():
+    """numba wraps each array passed from Python once per call (its unboxing); the tick's
+    compiled code allocates nothing beyond that."""
+    q = pose()
+    estimator = started(q)
+    records = [record(q, tick=tick) for tick in range(1, 101)]
+    estimator.update(records[0], LOADED)
+    _nrt_python.memsys_enable_stats()
+    try:
+        before = rtsys.get_allocation_stats().alloc
+        for sample in records[1:]:
+            estimator.update(sample, LOADED)
+        allocated = rtsys.get_allocation_stats().alloc - before
+    finally:
+        _nrt_python.memsys_disable_stats()
+    arrays = sum(isinstance(a, np.ndarray) for a in estimator._tick_arrays)
+    assert allocated == 99 * arrays
+
+
+# ---------------------------------------------------------------------------- from the SDK
+
+
+def test_a_low_state_message_is_all_the_estimator_needs():
+    q = pose()
+    low = SdkLowState.from_pinocchio(q, np.zeros(18), foot_force_by_leg=dict.fromkeys(
+        LEGS, LOADED_COUNT))
+    low.tick = 5
+    estimator = StateEstimator()
+    estimate = estimator.reset(low.sensor_record())
+    assert estimate.q[2] == pytest.approx(expected_height(q), abs=1e-9)
+    np.testing.assert_allclose(estimate.q[3:], q[3:], atol=1e-12)
+    message = SimpleNamespace(
+        imu_state=SimpleNamespace(quaternion=[np.nan] * 4, gyroscope=[0.0] * 3,
+                                  accelerometer=[0.0, 0.0, 9.81]),
+        motor_state=[SimpleNamespace(q=low.q[k], dq=0.0, tau_est=0.0) for k in range(20)
+                     if k < 12] + [SimpleNamespace(q=0.0, dq=0.0, tau_est=0.0)] * 8,
+        foot_force=[LOADED_COUNT] * 4, tick=6)
+    sample = sensor_record_from_message(message)  # NaN passes to the estimator
+    assert sample.tick == 6 and sample.stamp_s == pytest.approx(0.006)
+    np.testing.assert_array_equal(sample.q, q[7:])  # SDK order mapped to the description's
+    estimate = estimator.update(sample, LOADED)
+    assert estimate.flags & QUATERNION_NON_FINITE and estimate.usable
+
+
+# ---------------------------------------------------------------------------- bad input
+
+
+def test_bad_input_gets_one_clear_error():
+    with pytest.raises(ConfigurationError, match=r"^unknown estimator parameter\(s\) "
+                                                 r"\['tau'\]; valid parameters: orientation_"):
+        StateEstimator(tau=1.0)
+    with pytest.raises(ConfigurationError, match=r"^foot_force_off: expected less than "
+                                                 r"foot_force_on \(60\), received 70"):
+        EstimatorConfig(foot_force_off=70.0)
+    with pytest.raises(ConfigurationError, match=r"^trust_timeout_s: expected a value in "
+                                                 r"\[0, 10\], received -1"):
+        StateEstimator(trust_timeout_s=-1.0)
+    with pytest.raises(ConfigurationError, match=r"^gyroscope_rad_s: expected an array of "
+                                                 r"shape \(3,\), received shape \(4,\)"):
+        SensorRecord(0.0, 0, [1, 0, 0, 0], [0, 0, 0, 0], np.zeros(3), np.zeros(12),
+                     np.zeros(12), np.zeros(12), np.zeros(4))
+    with pytest.raises(ConfigurationError, match=r"^tick: expected a whole number"):
+        SensorRecord(0.0, 1.5, [1, 0, 0, 0], np.zeros(3), np.zeros(3), np.zeros(12),
+                     np.zeros(12), np.zeros(12), np.zeros(4))
+    estimator = StateEstimator()
+    with pytest.raises(ConfigurationError, match=r"call reset\(record\) first"):
+        estimator.update(record(pose(), tick=1), LOADED)
+    broken = record(pose(), tick=0)
+    broken.imu_quaternion_wxyz[:] = [2.0, 0.0, 0.0, 0.0]
+    with pytest.raises(ConfigurationError, match=r"^imu_quaternion_wxyz: expected a unit "
+                                                 r"quaternion \(w, x, y, z\) to start from, "
+                                                 r"received \[2.0, 0.0, 0.0, 0.0\]"):
+        estimator.reset(broken)
+    broken = record(pose(), tick=0)
+    broken.q[0] = np.nan
+    with pytest.raises(ConfigurationError, match=r"^q: non-finite value at index \[0\]"):
+        estimator.reset(broken)
+    estimator.reset(record(pose(), tick=0))  # still usable after the refusals
+    with pytest.raises(ConfigurationError, match=r"^normal_force_bounds: expected 4 numbers"):
+        estimator.update(record(pose(), tick=1), np.zeros(3))
+    assert estimator.update(record(pose(), tick=1), LOADED).trusted
+    with pytest.raises(UnknownNameError, match=r"^unknown estimator parameter 'nope'; valid "
+                                               r"estimator parameters: orientation_time_"):
+        EstimatorConfig(nope=1)  # type: ignore[call-arg]
