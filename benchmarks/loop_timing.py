@@ -3,10 +3,12 @@
 Run ``python -m benchmarks.loop_timing [--quick] [--json PATH]``.
 
 The episode is the command line's default high five (``go2-wbc high-five``: its height and
-hold, the default plant, the robot standing :data:`sim.cli.SETTLE_S` before the goal), at
-1 kHz and at 500 Hz (``control_period_s=2e-3``, two 1 ms physics steps per tick). Each rate
-gets two episodes on fresh loops, both timed from the goal's sending to its result, as the
-command line times a run:
+hold, the default plant and sensors, the controller on the estimated state, the robot
+standing :data:`sim.cli.SETTLE_S` before the goal), at 1 kHz and at 500 Hz
+(``control_period_s=2e-3``, two 1 ms physics steps per tick), and the same on the
+simulator's exact state (``--state truth``) for comparison: the estimate's cost is the ratio
+of the two real-time factors. Each rate and state gets two episodes on fresh loops, both
+timed from the goal's sending to its result, as the command line times a run:
 
 1. Per-tick breakdown: a loop of this module that calls the pieces ``spin_once`` calls, in
    its order, with ``time.perf_counter`` around each (listed below).
@@ -18,7 +20,10 @@ command line times a run:
 
 The parts of a tick:
 
-- ``state``: ``robot.read_state()`` (MuJoCo to Pinocchio conventions, joint order);
+- ``sensors``: ``robot.read_sensors()`` (the simulated sensors, their noise, the joint and
+  leg orders); with ``--state truth``, ``robot.read_state()`` (MuJoCo to Pinocchio);
+- ``estimator``: ``loop.estimate_state`` (the contact schedule, the state estimator's tick,
+  the copies of ``q`` and ``v``); nothing with ``--state truth``;
 - ``actions``: ``context.observe`` and ``runner.tick`` (the action servers and the
   behaviours: the high five's phases and balance watch);
 - ``controller``: ``controller.step``, and below it the stages its
@@ -73,7 +78,9 @@ from sim.run_recorder import MetricsHook
 #: Control periods [s] of the runs: 1 kHz and the GO2's usual 500 Hz.
 PERIODS_S = (1e-3, 2e-3)
 #: Parts of a tick, in the order the loop runs them (``rest`` is split around physics).
-PARTS = ("state", "actions", "controller", "rest", "physics")
+PARTS = ("sensors", "estimator", "actions", "controller", "rest", "physics")
+#: Where the controller's state comes from in the runs, and the runs' order at each rate.
+STATES = ("estimate", "truth")
 #: The hold [s] of a quick run.
 QUICK_HOLD_S = 0
 PACKAGES = ("mujoco", "numpy", "numba", "pin", "daqp")
@@ -89,11 +96,13 @@ def cli_defaults() -> dict[str, Any]:
             "control_rate_hz": args.control_rate, "settle_s": SETTLE_S}
 
 
-def _build(period_s: float, plant: Plant, metrics: bool) -> tuple[ControlLoop, list[str]]:
+def _build(period_s: float, plant: Plant, metrics: bool, state: str = "estimate"
+           ) -> tuple[ControlLoop, list[str]]:
     """A standing loop at ``period_s`` as ``go2-wbc`` builds it, settled; and the list whose
     one entry the episode's feedback keeps at the goal's phase (for the metrics hook)."""
     loop = ControlLoop.simulated(pose="standing", plant=plant, control_period_s=period_s,
-                                 physics_timestep_s=min(PHYSICS_TIMESTEP_S, period_s))
+                                 physics_timestep_s=min(PHYSICS_TIMESTEP_S, period_s),
+                                 state=state)
     loop.spin_for(SETTLE_S)
     phase = [""]
     if metrics:
@@ -193,12 +202,18 @@ class _TimedTicks:
         self._stepped = 0.0
         t0 = clock()
         now = robot.time_s
-        q, v = robot.read_state()
+        if loop.estimator is None:
+            q, v = robot.read_state()
+            ts = clock()
+        else:
+            record = robot.read_sensors()
+            ts = clock()
+            q, v = loop.estimate_state(record)
         t1 = clock()
         context.observe(now, q, v)
         loop.runner.tick(now)
         t2 = clock()
-        raw = controller.step(q, v)
+        raw = loop.command(q, v)
         t3 = clock()
         out = loop.guard(raw, v)
         context.record_output(out)
@@ -209,8 +224,8 @@ class _TimedTicks:
         for hook in loop.hooks:
             hook(loop, out)
         t6 = clock()
-        for part, seconds in zip(PARTS, (t1 - t0, t2 - t1, t3 - t2, (t4 - t3) + (t6 - t5),
-                                         t5 - t4)):
+        for part, seconds in zip(PARTS, (ts - t0, t1 - ts, t2 - t1, t3 - t2,
+                                         (t4 - t3) + (t6 - t5), t5 - t4)):
             self.samples[part].append(seconds)
         self.samples["tick"].append(t6 - t0)
         self.mj_step.append(self._stepped)
@@ -219,7 +234,8 @@ class _TimedTicks:
 
     def breakdown(self) -> dict[str, dict[str, float]]:
         """Per-part statistics [us]; ``controller.<stage>`` and ``physics.mj_step`` below."""
-        out = {part: _stats_us(self.samples[part]) for part in ("state", "actions", "controller")}
+        out = {part: _stats_us(self.samples[part])
+               for part in ("sensors", "estimator", "actions", "controller")}
         out.update({f"controller.{k}": _stats_us(v) for k, v in self.stages.items()})
         out["physics"] = _stats_us(self.samples["physics"])
         out["physics.mj_step"] = _stats_us(self.mj_step)
@@ -237,20 +253,22 @@ def _stats_us(seconds: Sequence[float]) -> dict[str, float]:
             "mean": float(values.mean()), "samples": int(values.size)}
 
 
-def run_rate(period_s: float, goal: HighFiveGoal, plant: Plant, *, metrics: bool = False
-             ) -> dict[str, Any]:
+def run_rate(period_s: float, goal: HighFiveGoal, plant: Plant, *, metrics: bool = False,
+             state: str = "estimate") -> dict[str, Any]:
     """The two episodes at one control period: the breakdown, then the real-time factor."""
     physics_s = min(PHYSICS_TIMESTEP_S, period_s)
     # The instrumented episode first: the process's first goal also pays one-off costs
     # (compiled code loaded, memory first touched), about 10 % of a 1 kHz episode.
-    loop, phase = _build(period_s, plant, metrics)
+    loop, phase = _build(period_s, plant, metrics, state)
     timed = _TimedTicks(loop)
     with timed.timing_mj_step():
         instrumented = _run(loop, phase, goal, timed)
-    loop, phase = _build(period_s, plant, metrics)
+    loop, phase = _build(period_s, plant, metrics, state)
     plain = _run(loop, phase, goal, loop.spin_once)
     return {
-        "name": f"{1.0 / period_s:g} Hz" + (" + metrics hook" if metrics else ""),
+        "name": (f"{1.0 / period_s:g} Hz, {'estimated' if state == 'estimate' else 'truth'}"
+                 + (" + metrics hook" if metrics else "")),
+        "state": state,
         "control_period_s": period_s,
         "physics_timestep_s": physics_s,
         "physics_steps_per_tick": round(period_s / physics_s),
@@ -349,11 +367,17 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
     hold = QUICK_HOLD_S if quick else defaults["hold_seconds"]
     goal = HighFiveGoal(target_height=defaults["target_height"], hold_seconds=hold)
     plant = defaults["plant"]
-    plan = [(p, False) for p in PERIODS_S] + ([] if quick else [(PERIODS_S[0], True)])
+    plan = [(p, False, state) for p in PERIODS_S for state in STATES]
+    plan += [] if quick else [(PERIODS_S[0], True, "estimate")]
     runs = []
-    for period_s, metrics in plan:
-        log(f"{1.0 / period_s:g} Hz{' with the metrics hook' if metrics else ''}")
-        runs.append(run_rate(period_s, goal, plant, metrics=metrics))
+    for period_s, metrics, state in plan:
+        log(f"{1.0 / period_s:g} Hz on the {state}{' with the metrics hook' if metrics else ''}")
+        runs.append(run_rate(period_s, goal, plant, metrics=metrics, state=state))
+    ratios = {}
+    for period_s in PERIODS_S:
+        rtf = {r["state"]: r["real_time_factor"] for r in runs
+               if r["control_period_s"] == period_s and not r["hooks"]}
+        ratios[f"{1.0 / period_s:g} Hz"] = rtf["estimate"] / rtf["truth"]
     log("a fresh process: its first ticks and each action's first goal")
     fresh = run_fresh_process(quick)
     return {
@@ -366,6 +390,7 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
                                      "hold_seconds": defaults["hold_seconds"],
                                      "control_rate_hz": defaults["control_rate_hz"]}},
         "runs": runs,
+        "estimate_over_truth_real_time_factor": ratios,
         "fresh_process": fresh,
         "notes": [
             ("Real-time factor: sim time over wall time from the goal's sending to its result, "
@@ -400,6 +425,9 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"{r['name']:<26}{r['status']:>10}{r['ticks']:>7}{r['sim_s']:>7.2f}"
                      f"{r['wall_s']:>8.2f}{r['real_time_factor']:>7.2f}"
                      f"{r['cpu_share']:>6.2f}")
+    lines.append("real-time factor on the estimate over the truth's: " + ", ".join(
+        f"{rate} {ratio:.2f}" for rate, ratio in
+        report["estimate_over_truth_real_time_factor"].items()))
     for r in report["runs"]:
         lines += ["", (f"Per tick [us], {r['name']} (instrumented episode: RTF "
                        f"{r['instrumented']['real_time_factor']:.2f})"),

@@ -50,6 +50,7 @@ from sim.sensor_faults import SensorFault
 from sim.sensors import DEFAULT_SENSORS, SensorModel
 from wbc.balance_controller import BalanceController
 from wbc.description import LEGS
+from wbc.estimators import DEFAULT_ESTIMATOR, make_estimator
 from wbc.leg_lift import LegLiftTiming
 from wbc.whole_body_controller import WholeBodyController
 
@@ -94,6 +95,8 @@ class PlantCase:
     state: str = "estimate"
     #: Sensor faults, their times counted from the goal's start [s].
     sensor_faults: tuple[SensorFault, ...] = ()
+    #: The state estimator (:data:`wbc.estimators.ESTIMATORS`), when estimating.
+    estimator: str = DEFAULT_ESTIMATOR
 
     def sensor_model(self) -> SensorModel:
         """The sensor model (the preset resolved)."""
@@ -243,6 +246,8 @@ def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
         plant=case.plant, control_period_s=period,
         controller=controller or WholeBodyController(control_period_s=period),
         sensors=case.sensor_model(), sensor_seed=seed, state=case.state,
+        estimator=(make_estimator(case.estimator, control_period_s=period)
+                   if case.state == "estimate" else None),
         command_delay_ticks=case.delay_ticks,
         sensor_faults=[replace(f, at_s=f.at_s + faults_from_s) for f in case.sensor_faults])
 

@@ -22,6 +22,7 @@ from wbc.control_output import ControlOutput
 from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.motor_command import within_effort_limits
+from wbc.sensor_record import SensorRecord
 from wbc.state_estimator import StateEstimator
 from wbc.validation import check_name
 from wbc.whole_body_controller import WholeBodyController
@@ -171,11 +172,15 @@ class ControlLoop:
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
         """The ``(q, v)`` the controller gets this tick (new arrays): the estimate from this
         period's sensor sample and the controller's contact schedule, or the exact state."""
-        estimator = self.estimator
-        if estimator is None:
+        if self.estimator is None:
             return self.robot.read_state()
+        return self.estimate_state(self.robot.read_sensors())
+
+    def estimate_state(self, record: SensorRecord | None) -> tuple[np.ndarray, np.ndarray]:
+        """The estimator's tick on ``record`` (``None``: no sample this period) and the
+        controller's contact schedule; ``(q, v)`` as new arrays."""
         self.controller.normal_force_bounds(self._bounds)
-        estimate = estimator.update(self.robot.read_sensors(), self._bounds)
+        estimate = self.estimator.update(record, self._bounds)
         return estimate.q.copy(), estimate.v.copy()
 
     def true_state(self) -> tuple[np.ndarray, np.ndarray]:

@@ -36,8 +36,10 @@ drift does not enter. Roll and pitch come from gravity through the accelerometer
 cannot tell a small tilt from a horizontal accelerometer bias: the priors share it); the
 gyroscope bias is learnt on all three axes while feet stand still (a yaw rate moves the
 feet in the body frame), and the yaw itself drifts only as the feet let it. The position,
-velocity, orientation and biases are one filter (the linear filter splits them), at about
-five times its cost. Fault flags, contact fusion and outputs are the linear filter's.
+velocity, orientation and biases are one filter (the linear filter splits them into three
+6-state ones, with the orientation given): a 27 x 27 covariance, propagated and corrected
+with row operations only, about 6 us a tick compiled (the linear filter's kernel: 3.5 us),
+with no allocation. Fault flags, contact fusion and outputs are the linear filter's.
 """
 
 from __future__ import annotations
@@ -97,7 +99,17 @@ class InvariantEkfConfig:
 
     The noise densities are continuous-time: a tick of ``dt`` seconds adds ``noise^2 dt`` to
     the covariance. They are tuning numbers (they take up what the models miss), not the
-    sensors' datasheet values.
+    sensors' datasheet values. They start from what go2_odometry's InEKF uses on a GO2
+    (gyroscope 0.01, accelerometer 0.1, bias walks 1e-5 and 1e-4, contact 1e-3, kinematics
+    1e-3 rad). Measured in closed loop (high fives, three sensor seeds; velocity error RMS,
+    largest roll or pitch error): those give 0.74 mm/s and 0.16 deg; a gyroscope of 0.003
+    and an accelerometer-bias prior of 0.2 m/s^2 (a MEMS offset of about 20 mg) give 0.52
+    mm/s and 0.055 deg; the other noises change nothing measurable within a factor of 3.
+    The gyroscope-bias prior of 0.01 rad/s (a MEMS offset of about 0.5 deg/s) costs 0.02
+    deg of that on the simulated GO2's small biases, but learns a 3e-3 rad/s bias in 5 s
+    rather than over 30 s (1e-3 rad/s: the estimate tilted 0.35 deg meanwhile), and with
+    larger biases in closed loop (5e-3 rad/s, 0.1 m/s^2) kept the raised foot within 1.9
+    mm RMS of its target instead of 4.9.
 
     Attributes:
         gyroscope_noise: Gyroscope noise density [rad/s/sqrt(Hz)].
@@ -151,7 +163,7 @@ class InvariantEkfConfig:
     swing_noise_scale: float = 100.0
     min_contact_weight: float = 0.02
     initial_tilt_rad: float = 0.01
-    initial_gyro_bias_rad_s: float = 1e-3
+    initial_gyro_bias_rad_s: float = 0.01
     initial_accel_bias_m_s2: float = 0.2
     quaternion_tolerance: float = 0.01
     quaternion_timeout_s: float = 1.0
@@ -453,7 +465,7 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
         params[5], params[6], params[7], params[8], params[9], params[10], params[11],
         params[12], params[13], params[14], params[15], params[16], params[17], params[18],
         params[19])
-    flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok = check_sample(
+    flags, dt, new, _quaternion_ok, gyro_ok, accel_ok, joints_ok = check_sample(
         fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock, dt_nominal,
         quat_tol)
     rotation = work[0:9].reshape((3, 3))
@@ -617,7 +629,7 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
            keep_yaw, work):  # pragma: no cover - compiled
     """Start on four loaded feet, at rest: orientation from the IMU (yaw 0 unless
     ``keep_yaw``), height from the feet on the floor, the base at ``(base_x, base_y)``,
-    biases 0, and the priors' covariance. ``work`` (54,): scratch."""
+    biases 0, and the priors' covariance. ``work`` (57,): scratch."""
     sigma_pos, radius = params[6], params[18]
     tilt, gyro_bias, accel_bias = params[20], params[21], params[22]
     measured, align, quat = work[0:4], work[4:8], work[8:12]
@@ -659,11 +671,25 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
         P[_P + k, _P + k] = sigma_pos * sigma_pos if k == 2 else 1e-8
         P[_BG + k, _BG + k] = gyro_bias * gyro_bias
         P[_BA + k, _BA + k] = accel_bias * accel_bias
+    # The position is known in the world, the orientation is not: the right-invariant error
+    # measures the position about the world's origin, xi_p = dp + p^ xi_R. (Left out, a
+    # later roll or pitch correction would swing the base about the origin.)
+    hat = rotation  # reused: p^
+    px, py, pz = x[_POS], x[_POS + 1], x[_POS + 2]
+    hat[0, 0], hat[0, 1], hat[0, 2] = 0.0, -pz, py
+    hat[1, 0], hat[1, 1], hat[1, 2] = pz, 0.0, -px
+    hat[2, 0], hat[2, 1], hat[2, 2] = -py, px, 0.0
+    for r in range(3):
+        for c in range(3):
+            P[_P + r, _R + c] = P[_R + c, _P + r] = hat[r, c] * P[_R + c, _R + c]
+            for k in range(3):
+                P[_P + r, _P + c] += hat[r, k] * P[_R + k, _R + k] * hat[c, k]
     # A foot's error is the position's plus its kinematic noise (right-invariant error).
     for i in range(4):
         e = _D + 3 * i
         for r in range(3):
             for c in range(3):
+                P[e + r, _R + c] = P[_R + c, e + r] = P[_P + r, _R + c]
                 P[e + r, _P + c] = P[_P + r, e + c] = P[_P + r, _P + c]
                 for j in range(4):
                     P[e + r, _D + 3 * j + c] = P[_P + r, _P + c]
