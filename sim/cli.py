@@ -40,6 +40,7 @@ from sim.video_recorder import VideoRecorder, choose_offscreen_gl
 from sim.viewer import Pacer, ViewerHook, window_problem
 from wbc.description import LEGS
 from wbc.errors import ConfigurationError, WbcError
+from wbc.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, make_estimator
 from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
 if TYPE_CHECKING:
@@ -315,6 +316,10 @@ def _state_options(group: Any) -> None:
                        help="the controller's state: 'estimate' (default: the state estimator "
                             "on the simulated sensors, as on a real GO2) or 'truth' (the "
                             "simulator's exact state, for comparison)")
+    group.add_argument("--estimator", choices=tuple(ESTIMATORS), default=DEFAULT_ESTIMATOR,
+                       help="the state estimator: " + "; ".join(
+                           f"'{name}': {what}" for name, what in ESTIMATORS.items())
+                       + f" (default: {DEFAULT_ESTIMATOR}; see the README's State estimation)")
     group.add_argument("--sensors", choices=tuple(SENSOR_PRESETS), default=DEFAULT_SENSORS,
                        help=f"what the simulated GO2 measures (default: {DEFAULT_SENSORS}: its "
                             "IMU, encoders and foot sensors with noise and biases; 'exact': "
@@ -410,7 +415,7 @@ def state_line(args: argparse.Namespace) -> str:
         return ("state: the simulator's exact state (--state truth; a GO2 measures no base "
                 f"position or velocity); {args.sensor_model.describe()} unused")
     faults = "".join(f"; fault: {fault.describe()}" for fault in args.sensor_fault)
-    return (f"state: estimated (linear Kalman filter, IMU and leg kinematics) from "
+    return (f"state: estimated ({args.estimator}, {ESTIMATORS[args.estimator]}) from "
             f"{args.sensor_model.describe()}, seed {args.sensor_seed}{faults}")
 
 
@@ -423,6 +428,8 @@ def simulated_loop(args: argparse.Namespace, pose: str = "standing") -> "Control
         pose=pose, plant=args.plant_model, control_period_s=args.control_period_s,
         physics_timestep_s=args.physics_dt, sensors=args.sensor_model,
         sensor_seed=args.sensor_seed, state=args.state,
+        estimator=(make_estimator(args.estimator, control_period_s=args.control_period_s)
+                   if args.state == "estimate" else None),
         command_delay_ticks=args.command_delay_ticks, sensor_faults=args.sensor_fault)
 
 
@@ -986,10 +993,11 @@ class GoalRun:
             "plant": dataclasses.asdict(self.args.plant_model),
             "state": {
                 "source": self.args.state,
+                "estimator": self.args.estimator if self.args.state == "estimate" else None,
                 "sensors": self.args.sensor_model.as_dict(),
                 "sensor_seed": self.args.sensor_seed,
-                "estimator": (None if self.loop.estimator is None
-                              else dataclasses.asdict(self.loop.estimator.config)),
+                "estimator_config": (None if self.loop.estimator is None
+                                     else dataclasses.asdict(self.loop.estimator.config)),
                 "command_delay_s": self.args.command_delay,
                 "sensor_faults": [dataclasses.asdict(f) for f in self.args.sensor_fault],
             },

@@ -23,7 +23,8 @@ from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.motor_command import within_effort_limits
 from wbc.sensor_record import SensorRecord
-from wbc.state_estimator import StateEstimator
+from wbc.estimators import make_estimator
+from wbc.state_estimator import EstimatorBase
 from wbc.validation import check_name
 from wbc.whole_body_controller import WholeBodyController
 
@@ -41,8 +42,8 @@ class ControlLoop:
     the same thread (as ``rclpy.spin_until_future_complete`` does).
 
     The controller sees what a GO2 measures: each tick the robot's sensor record goes
-    through a :class:`wbc.StateEstimator` (IMU, joint encoders, foot contact, and the
-    controller's contact schedule) to the controller's ``(q, v)``. When the estimator has had
+    through a state estimator (by default :class:`wbc.InvariantEkf`: IMU, joint encoders,
+    foot contact, and the controller's contact schedule) to the controller's ``(q, v)``. When the estimator has had
     no trustworthy sample for longer than its ``trust_timeout_s``, the loop sends the
     controller's safe command with the reason instead (a running goal then ends ABORTED),
     and resumes when samples return. ``state="truth"`` hands the controller the simulator's
@@ -57,7 +58,7 @@ class ControlLoop:
     def __init__(self, robot: RobotInterface, controller: BalanceController, *,
                  busy_policy: BusyPolicy = BusyPolicy.REJECT,
                  aliases: dict[str, str] | None = None, state: str = "estimate",
-                 estimator: StateEstimator | None = None):
+                 estimator: EstimatorBase | None = None):
         """Args:
             robot: The robot in its own joint order (simulated or real).
             controller: The balance controller (reset to the robot's state here).
@@ -65,8 +66,9 @@ class ControlLoop:
             aliases: The robot's joint names mapped to the description's, where they differ.
             state: ``estimate`` (the default: the state estimator on the robot's sensors) or
                 ``truth`` (the robot's exact state: simulators only).
-            estimator: The state estimator (by default one for the controller's control
-                period); started here on the robot's first sample, on four loaded feet.
+            estimator: The state estimator (by default :mod:`wbc.estimators`' default for the
+                controller's control period); started here on the robot's first sample, on
+                four loaded feet.
 
         Raises:
             UnknownNameError: An unknown ``state``.
@@ -81,12 +83,12 @@ class ControlLoop:
         self.runner: ActionRunner = make_go2_runner(self.context, busy_policy=busy_policy)
         self.runner.set_spinner(self.spin_once)
         self._bounds = np.zeros(len(LEGS))
-        self.estimator: StateEstimator | None = None
+        self.estimator: EstimatorBase | None = None
         if state == "truth":
             q, v = self.robot.read_state()
         else:
             period = getattr(getattr(controller, "config", None), "control_period_s", 1e-3)
-            self.estimator = estimator or StateEstimator(control_period_s=period)
+            self.estimator = estimator or make_estimator(control_period_s=period)
             record = self.robot.read_sensors()
             if record is None:
                 raise ConfigurationError(
@@ -106,7 +108,7 @@ class ControlLoop:
                   busy_policy: BusyPolicy = BusyPolicy.REJECT,
                   controller: BalanceController | None = None,
                   sensors: SensorModel | str = DEFAULT_SENSORS, sensor_seed: int = 0,
-                  state: str = "estimate", estimator: StateEstimator | None = None,
+                  state: str = "estimate", estimator: EstimatorBase | None = None,
                   command_delay_ticks: int = 0, sensor_faults: Sequence[SensorFault] = ()
                   ) -> ControlLoop:
         """A loop on a fresh MuJoCo GO2 in ``pose``, with the default whole-body controller.

@@ -18,7 +18,8 @@ How each signal is made, every control period of ``dt`` seconds:
   accelerometer that pulls roll and pitch towards the accelerometer's gravity with time
   constant ``attitude_time_constant_s``; it has no magnetometer, so its yaw drifts with the
   gyro's z bias. Its integral term (critically damped) learns the roll and pitch gyro
-  bias. Started on the true attitude. A time constant of 0 reports the truth.
+  bias. It starts where it settles at rest, tilted by the accelerometer's bias over g (a
+  real one has run since power-up). A time constant of 0 reports the truth.
 - joints: position + white noise, then quantised to the encoder's resolution; velocity +
   white noise; torque (the drivers' applied torque) + white noise. Robot joint order.
 - feet: a raw count ``offset + gain * normal force + noise``, clipped to ``[0, full scale]``
@@ -363,7 +364,7 @@ class SimulatedSensors:
         m = self.model
         self.gyro_bias = self._rng.normal(0.0, 1.0, 3) * m.gyro_bias_rad_s
         self.accel_bias = self._rng.normal(0.0, 1.0, 3) * m.accel_bias_m_s2
-        self._attitude = np.array(self.sim.data.qpos[3:7], dtype=float)
+        self._attitude = self._settled_attitude()
         self._integral = np.zeros(3)
         self._site_velocity = np.zeros(3)
         self._has_previous = False
@@ -371,6 +372,31 @@ class SimulatedSensors:
         self._noise = np.empty((0, _CHANNELS))
         self._row = 0
         self.ticks = 0
+
+    def _settled_attitude(self) -> np.ndarray:
+        """Where the robot's attitude filter has settled while the robot stood still before
+        the controller started: its "up" on the biased accelerometer's (``(w, x, y, z)``).
+
+        A real IMU's filter runs from power-up; at rest it tilts by about the accelerometer's
+        horizontal bias over g, so the first sample is already off by that much.
+        """
+        truth = np.array(self.sim.data.qpos[3:7], dtype=float)
+        if self.model.attitude_time_constant_s <= 0.0:
+            return truth
+        up = np.empty(3)
+        rotate_inverse(truth, np.array([0.0, 0.0, 1.0]), up)
+        measured = _GRAVITY * up + self.accel_bias
+        measured /= np.linalg.norm(measured)
+        axis = np.cross(up, measured)
+        sine = float(np.linalg.norm(axis))
+        if sine < 1e-12:
+            return truth
+        angle = math.atan2(sine, float(up @ measured))
+        tilt = -angle * axis / sine  # body-frame rotation that turns "up" onto the measurement
+        step, settled = np.empty(4), np.empty(4)
+        quat_exp(tilt[0], tilt[1], tilt[2], step)
+        quat_multiply(truth, step, settled)
+        return settled
 
     def sample(self, record: SensorRecord) -> None:
         """Fill ``record`` with a sample of the plant's current state (one per period)."""

@@ -54,7 +54,7 @@ def test_send_goal_prints_the_goal_id_acceptance_feedback_and_result(high_five):
     code, out = high_five
     assert code == EXIT_SUCCEEDED, out
     lines = out.splitlines()
-    assert lines[0].startswith("state: estimated (linear Kalman filter") and lines[1].startswith(
+    assert lines[0].startswith("state: estimated (inekf, ") and lines[1].startswith(
         "plant menagerie")
     assert lines[2:4] == ["Waiting for an action server to become available...",
                           "Sending goal:"]

@@ -38,9 +38,9 @@ HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "re
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: The first line of a run: the state source and the default sensors.
 STATE_LINE = (
-    "state: estimated (linear Kalman filter, IMU and leg kinematics) from sensors go2 (gyro "
-    "0.004 rad/s, accel 0.03 m/s^2, attitude filter 5 s; joints 5e-05 rad / 0.02 rad/s; feet "
-    "2.5 counts/N), seed 0")
+    "state: estimated (inekf, contact-aided invariant EKF: IMU and leg kinematics) from "
+    "sensors go2 (gyro 0.004 rad/s, accel 0.03 m/s^2, attitude filter 5 s; joints 5e-05 rad / "
+    "0.02 rad/s; feet 2.5 counts/N), seed 0")
 #: The second line of a run on the default plant and rates.
 MENAGERIE_LINE = (
     "plant menagerie (joints: damping 2 N m s/rad, friction loss 0.2 N m, armature 0.01 "
@@ -139,7 +139,9 @@ def test_report_has_the_result_phases_in_order_and_the_feedback(high_five):
     state = report["state"]
     assert state["source"] == "estimate" and state["sensors"]["name"] == "go2"
     assert state["sensors"]["gyro_noise_rad_s"] == 0.004 and state["sensor_seed"] == 0
-    assert state["estimator"]["trust_timeout_s"] == 0.01 and state["command_delay_s"] == 0.0
+    assert state["estimator"] == "inekf"
+    assert state["estimator_config"]["trust_timeout_s"] == 0.01
+    assert state["command_delay_s"] == 0.0
     assert state["sensor_faults"] == []
     assert report["result"] == {
         "status": "SUCCEEDED", "success": True,

@@ -295,7 +295,7 @@ def test_the_tick_allocates_nothing_in_compiled_code():
 
 def test_bad_configuration_names_the_field():
     with pytest.raises(ConfigurationError, match=r"^unknown estimator parameter\(s\) "
-                                                 r"\['tau'\]; valid parameters: gyroscope_"):
+                                                 r"\['tau'\]; valid parameters: quaternion_"):
         InvariantEkf(tau=1.0)
     with pytest.raises(ConfigurationError, match=r"^gyroscope_noise: expected a value in "
                                                  r"\(1e-09, 10\], received -1"):
@@ -311,7 +311,7 @@ def test_bad_configuration_names_the_field():
     with pytest.raises(ConfigurationError, match=r"^use_foot_force: expected true or false"):
         InvariantEkfConfig(use_foot_force=1)  # type: ignore[arg-type]
     with pytest.raises(UnknownNameError, match=r"^unknown estimator parameter 'nope'; valid "
-                                               r"estimator parameters: gyroscope_noise, "):
+                                               r"estimator parameters: quaternion_tolerance, "):
         InvariantEkfConfig(nope=1)  # type: ignore[call-arg]
     with pytest.raises(ConfigurationError, match=r"^control_period_s: expected a value in "
                                                  r"\(0, 0.1\], received 0"):

@@ -61,6 +61,18 @@ def test_the_state_estimate_is_accurate_through_the_high_five(episode):
     assert s.estimate_roll_max_deg <= 0.3 and s.estimate_pitch_max_deg <= 0.3
 
 
+def test_the_linear_filter_meets_the_same_bounds():
+    """The alternative estimator (``--estimator kf``), on the default plant at 1 kHz."""
+    episode = run_high_five(PlantCase(estimator="kf"), hold_s=2, height_m=0.40)
+    assert episode.status is GoalStatus.SUCCEEDED, episode.message
+    s = episode.summary
+    assert s.raised_foot_rms_mm <= 5.0 and s.holding_rms_mm <= 3.0 and s.qp_failures == 0
+    assert s.stance_sliding_max_mm <= 2.0 and episode.max_tilt_deg <= 3.0
+    assert episode.final_tilt_deg <= 0.5
+    assert s.estimate_velocity_rms_m_s <= 0.02 and s.estimate_height_max_mm <= 3.0
+    assert s.estimate_roll_max_deg <= 0.3 and s.estimate_pitch_max_deg <= 0.3
+
+
 def test_the_high_five_on_the_truth_meets_the_same_bounds():
     """The comparison: the controller reading the simulator's exact state."""
     truth = run_high_five(PlantCase(state="truth"), hold_s=2, height_m=0.40)

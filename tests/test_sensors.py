@@ -172,6 +172,19 @@ def test_the_imu_attitude_filter_settles_on_the_accelerometer_bias_and_corrects_
     assert rolls[0] == pytest.approx(2.0, abs=1e-3) and abs(rolls[-1]) < 0.05
 
 
+def test_the_imu_starts_settled_on_its_biased_accelerometer():
+    """A real IMU's filter has run since power-up: it starts tilted by the bias over g."""
+    sim = Go2Simulator()  # level
+    sensors = SimulatedSensors(sim, "go2", seed=2)
+    record = SensorRecord.zeros()
+    sensors.sample(record)
+    w, x, y, _ = record.imu_quaternion_wxyz
+    bias = sensors.accel_bias
+    assert math.degrees(2 * x) == pytest.approx(math.degrees(bias[1] / 9.81), abs=2e-3)
+    assert math.degrees(2 * y) == pytest.approx(-math.degrees(bias[0] / 9.81), abs=2e-3)
+    assert abs(bias[:2]).max() > 1e-3  # this seed's bias is large enough to show it
+
+
 def test_a_robot_in_the_sdk_order_reports_in_its_orders_and_is_mapped_by_name():
     mapped = []
     for order in (None, UNITREE_SDK_JOINT_NAMES):

@@ -22,6 +22,7 @@ from wbc.state_estimator import (
     STALE,
     EstimatorConfig,
     StateEstimator,
+    check_sample,
 )
 from wbc.unitree_sdk import SdkLowState, sensor_record_from_message
 
@@ -160,6 +161,22 @@ def test_stale_and_missing_samples_are_untrusted_and_unusable_after_the_timeout(
     assert estimate.q[2] == pytest.approx(expected_height(q), abs=1e-6)
 
 
+def test_time_predicted_without_samples_is_not_predicted_again():
+    quat, gyro, accel = np.array([1.0, 0, 0, 0]), np.zeros(3), np.array([0, 0, 9.81])
+    joints = np.zeros(12)
+    clock = np.array([9.0, 0.009, 0.0, 0.0])  # the last sample: tick 9 at 9 ms
+
+    def step(fresh: bool, tick: int) -> float:
+        return check_sample(fresh, float(tick), tick * 1e-3, quat, gyro, accel, joints, joints,
+                            clock, 1e-3, 0.01)[1]
+
+    assert [step(False, 9) for _ in range(4)] == [1e-3] * 4  # four missing: 4 ms predicted
+    assert step(True, 10) == pytest.approx(0.0)  # 10 ms: 1 ms after 9, already predicted
+    assert step(True, 11) == pytest.approx(1e-3)
+    assert step(True, 11) == pytest.approx(1e-3)  # stale: predicted on
+    assert step(True, 13) == pytest.approx(1e-3)  # 2 ms, 1 of them predicted
+
+
 def test_a_bad_quaternion_is_reported_and_the_gyroscope_carries_the_orientation():
     q = pose()
     estimator = started(q)
@@ -276,7 +293,7 @@ def test_a_low_state_message_is_all_the_estimator_needs():
 
 def test_bad_input_gets_one_clear_error():
     with pytest.raises(ConfigurationError, match=r"^unknown estimator parameter\(s\) "
-                                                 r"\['tau'\]; valid parameters: orientation_"):
+                                                 r"\['tau'\]; valid parameters: quaternion_"):
         StateEstimator(tau=1.0)
     with pytest.raises(ConfigurationError, match=r"^foot_force_off: expected less than "
                                                  r"foot_force_on \(60\), received 70"):
@@ -309,5 +326,5 @@ def test_bad_input_gets_one_clear_error():
         estimator.update(record(pose(), tick=1), np.zeros(3))
     assert estimator.update(record(pose(), tick=1), LOADED).trusted
     with pytest.raises(UnknownNameError, match=r"^unknown estimator parameter 'nope'; valid "
-                                               r"estimator parameters: orientation_time_"):
+                                               r"estimator parameters: quaternion_tolerance, "):
         EstimatorConfig(nope=1)  # type: ignore[call-arg]

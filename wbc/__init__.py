@@ -1,4 +1,5 @@
-"""Whole-body control of the Unitree GO2: description, QP controller, solver backends.
+"""Whole-body control of the Unitree GO2: description, QP controller, solver backends, state
+estimation.
 
 ``from wbc import WholeBodyController`` is the main entry point. The controller and what
 depends on the tasks are imported on first use, so that ``tasks`` may use this package's
@@ -38,6 +39,15 @@ _LAZY = {
     "Regularization": "wbc.problem_builder",
     "SupportPolygon": "wbc.support_polygon",
     "available_backends": "wbc.backends",
+    "SensorRecord": "wbc.sensor_record",
+    "StateEstimator": "wbc.state_estimator",
+    "StateEstimate": "wbc.state_estimator",
+    "EstimatorConfig": "wbc.state_estimator",
+    "InvariantEkf": "wbc.invariant_ekf",
+    "InvariantEkfConfig": "wbc.invariant_ekf",
+    "make_estimator": "wbc.estimators",
+    "LegKinematics": "wbc.leg_kinematics",
+    "sensor_record_from_message": "wbc.unitree_sdk",
 }
 
 __all__ = [

@@ -45,30 +45,25 @@ with no allocation. Fault flags, contact fusion and outputs are the linear filte
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
 
-from tasks.compiled_call import bind_compiled
-from wbc.description import FOOT_RADIUS_M, Go2Description
-from wbc.errors import ConfigurationError
-from wbc.leg_kinematics import LegKinematics, leg_kinematics
+from wbc.description import Go2Description
+from wbc.leg_kinematics import leg_kinematics
 from wbc.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, quat_rotation, quat_yaw
-from wbc.sensor_record import SensorRecord
 from wbc.state_estimator import (
-    FOOT_OK,
-    UNTRUSTED,
-    StateEstimate,
+    EstimatorBase,
+    SensorTrustConfig,
     account_trust,
     check_sample,
     contact_weights,
-    describe_faults,
     foot_motion,
     write_outputs,
 )
-from wbc.validation import as_float, as_vector, known_fields_only
+from wbc.validation import known_fields_only
 
 _GRAVITY = 9.81
 
@@ -82,8 +77,6 @@ _QUAT, _VEL, _POS, _FEET, _GBIAS, _ABIAS, _GYRO, _ACCEL = 0, 4, 7, 10, 22, 25, 2
 _X_SIZE = 34
 #: Scratch space of the tick's kernel (see :func:`_estimate`).
 _WORK_SIZE = 497
-#: ``clock``'s entry: the time without a trusted sample.
-_UNTRUSTED_S = 2
 #: The transition matrix's off-identity 3 x 3 blocks ``(row block, column block)``, in the
 #: order :func:`_transition_blocks` fills them: no block reads a row block that an earlier
 #: one wrote, so ``(I + F) P`` can be computed in place, row block by row block.
@@ -94,7 +87,7 @@ _BLOCKS = 12
 
 @known_fields_only("estimator parameter")
 @dataclass(frozen=True)
-class InvariantEkfConfig:
+class InvariantEkfConfig(SensorTrustConfig):
     """Every number of the invariant EKF, validated (an error names the field and its range).
 
     The noise densities are continuous-time: a tick of ``dt`` seconds adds ``noise^2 dt`` to
@@ -120,36 +113,37 @@ class InvariantEkfConfig:
             rolling the model misses).
         kinematics_noise_rad: Joint-angle noise [rad] of a foot's kinematic position (its
             covariance ``kinematics_noise_rad^2 J J^T``).
-        foot_position_noise_m: Noise [m] added to every axis of it (the model's errors).
         foot_velocity_noise_m_s: Noise [m/s] of the IMU velocity from a rolling stance
             foot (0: not measured).
         foot_height_noise_m: Noise [m] of a stance foot's height above a flat floor at
             z = 0 (0: not measured).
-        swing_noise_scale: How much a foot's measurement noise grows at zero contact weight.
-        min_contact_weight: Below this weight a foot follows the kinematics freely.
         initial_tilt_rad: Prior standard deviation of roll and pitch at :meth:`reset` [rad]
             (they come from the IMU's attitude filter then).
         initial_gyro_bias_rad_s: Prior standard deviation of the gyroscope bias [rad/s].
         initial_accel_bias_m_s2: Prior standard deviation of the accelerometer bias
             [m/s^2].
-        quaternion_tolerance: Largest ``| |quat| - 1 |`` of a quaternion taken as unit (the
-            start's, and the fault flags').
-        quaternion_timeout_s: Unused (the orientation never depends on the IMU's
-            quaternion); kept for the fault text shared with the linear filter.
-        full_trust_force_n: A stance foot whose normal-force bound [N] is at least this
-            has the schedule's full weight.
-        use_foot_force: Fuse the foot-force counts with the schedule (off: schedule only).
-        foot_force_on: Count above which a foot turns to contact.
-        foot_force_off: Count below which it turns to no contact.
-        foot_force_full_scale: The sensor's highest count: a reading there is saturated.
-        foot_sensor_stuck_s: A stance foot's sensor whose count does not change for this
-            long [s] is stuck.
-        foot_sensor_recover_s: It is trusted again after this long [s] of changing,
-            in-range readings.
-        trust_timeout_s: Time [s] without a trustworthy sample (fresh, finite joints and
-            gyroscope) after which the estimate is not usable.
-        foot_radius_m: Radius of the foot spheres [m].
+
+    The shared ones are :class:`wbc.state_estimator.SensorTrustConfig`'s; here
+        ``quaternion_timeout_s`` is unused: the orientation never depends on the IMU's
+        quaternion after :meth:`InvariantEkf.reset`.
     """
+
+    _RANGES: ClassVar[dict[str, tuple[float, float]]] = {
+        "gyroscope_noise": (1e-9, 10.0), "accelerometer_noise": (1e-9, 100.0),
+        "gyro_bias_noise": (1e-12, 1.0), "accel_bias_noise": (1e-12, 10.0),
+        "contact_noise": (1e-9, 10.0), "kinematics_noise_rad": (0.0, 1.0),
+        "foot_velocity_noise_m_s": (0.0, 10.0), "foot_height_noise_m": (0.0, 1.0),
+        "initial_tilt_rad": (1e-9, 1.0), "initial_gyro_bias_rad_s": (1e-9, 1.0),
+        "initial_accel_bias_m_s2": (1e-9, 10.0),
+    }
+    _PARAMS: ClassVar[tuple[str, ...]] = (
+        "gyroscope_noise", "accelerometer_noise", "gyro_bias_noise", "accel_bias_noise",
+        "contact_noise", "kinematics_noise_rad", "foot_position_noise_m",
+        "foot_velocity_noise_m_s", "foot_height_noise_m", "swing_noise_scale",
+        "min_contact_weight", "full_trust_force_n", "use_foot_force", "foot_force_on",
+        "foot_force_off", "foot_force_full_scale", "foot_sensor_stuck_s",
+        "foot_sensor_recover_s", "foot_radius_m", "quaternion_tolerance",
+        "initial_tilt_rad", "initial_gyro_bias_rad_s", "initial_accel_bias_m_s2")
 
     gyroscope_noise: float = 0.003
     accelerometer_noise: float = 0.1
@@ -157,73 +151,11 @@ class InvariantEkfConfig:
     accel_bias_noise: float = 1e-4
     contact_noise: float = 1e-3
     kinematics_noise_rad: float = 1e-3
-    foot_position_noise_m: float = 2e-3
     foot_velocity_noise_m_s: float = 0.0
     foot_height_noise_m: float = 0.0
-    swing_noise_scale: float = 100.0
-    min_contact_weight: float = 0.02
     initial_tilt_rad: float = 0.01
     initial_gyro_bias_rad_s: float = 0.01
     initial_accel_bias_m_s2: float = 0.2
-    quaternion_tolerance: float = 0.01
-    quaternion_timeout_s: float = 1.0
-    full_trust_force_n: float = 30.0
-    use_foot_force: bool = True
-    foot_force_on: float = 60.0
-    foot_force_off: float = 40.0
-    foot_force_full_scale: float = 1000.0
-    foot_sensor_stuck_s: float = 0.05
-    foot_sensor_recover_s: float = 0.5
-    trust_timeout_s: float = 0.01
-    foot_radius_m: float = FOOT_RADIUS_M
-
-    def __post_init__(self) -> None:
-        for name, (low, high) in _RANGES.items():
-            as_float(name, getattr(self, name), low=low, high=high, low_inclusive=low == 0.0)
-        if not isinstance(self.use_foot_force, bool):
-            raise ConfigurationError(
-                f"use_foot_force: expected true or false, received {self.use_foot_force!r}")
-        if self.foot_force_off >= self.foot_force_on:
-            raise ConfigurationError(
-                f"foot_force_off: expected less than foot_force_on ({self.foot_force_on:g}), "
-                f"received {self.foot_force_off:g}")
-        if self.foot_force_full_scale <= self.foot_force_on:
-            raise ConfigurationError(
-                f"foot_force_full_scale: expected more than foot_force_on "
-                f"({self.foot_force_on:g}), received {self.foot_force_full_scale:g}")
-
-    @staticmethod
-    def field_names() -> tuple[str, ...]:
-        """Every field's name."""
-        return tuple(f.name for f in fields(InvariantEkfConfig))
-
-    def _vector(self) -> np.ndarray:
-        return np.array([getattr(self, name) for name in _PARAMS], dtype=float)
-
-
-#: Valid range of each numeric field (a 0 lower bound is inclusive, others exclusive).
-_RANGES: dict[str, tuple[float, float]] = {
-    "gyroscope_noise": (1e-9, 10.0), "accelerometer_noise": (1e-9, 100.0),
-    "gyro_bias_noise": (1e-12, 1.0), "accel_bias_noise": (1e-12, 10.0),
-    "contact_noise": (1e-9, 10.0), "kinematics_noise_rad": (0.0, 1.0),
-    "foot_position_noise_m": (1e-9, 1.0), "foot_velocity_noise_m_s": (0.0, 10.0),
-    "foot_height_noise_m": (0.0, 1.0), "swing_noise_scale": (1.0, 1e6),
-    "min_contact_weight": (0.0, 1.0), "initial_tilt_rad": (1e-9, 1.0),
-    "initial_gyro_bias_rad_s": (1e-9, 1.0), "initial_accel_bias_m_s2": (1e-9, 10.0),
-    "quaternion_tolerance": (1e-6, 0.5), "quaternion_timeout_s": (1e-3, 60.0),
-    "full_trust_force_n": (1e-3, 1e4), "foot_force_on": (-32768.0, 32767.0),
-    "foot_force_off": (-32768.0, 32767.0), "foot_force_full_scale": (-32768.0, 32767.0),
-    "foot_sensor_stuck_s": (1e-3, 10.0), "foot_sensor_recover_s": (0.0, 60.0),
-    "trust_timeout_s": (0.0, 10.0), "foot_radius_m": (0.0, 0.1),
-}
-#: The numbers the kernel reads, in its order.
-_PARAMS = ("gyroscope_noise", "accelerometer_noise", "gyro_bias_noise", "accel_bias_noise",
-           "contact_noise", "kinematics_noise_rad", "foot_position_noise_m",
-           "foot_velocity_noise_m_s", "foot_height_noise_m", "swing_noise_scale",
-           "min_contact_weight", "full_trust_force_n", "use_foot_force", "foot_force_on",
-           "foot_force_off", "foot_force_full_scale", "foot_sensor_stuck_s",
-           "foot_sensor_recover_s", "foot_radius_m", "quaternion_tolerance",
-           "initial_tilt_rad", "initial_gyro_bias_rad_s", "initial_accel_bias_m_s2")
 
 
 # ----------------------------------------------------------------------------- the kernel
@@ -699,7 +631,7 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
 # ----------------------------------------------------------------------------- the class
 
 
-class InvariantEkf:
+class InvariantEkf(EstimatorBase):
     """The base's state from a GO2's sensors by a contact-aided invariant EKF (see the
     module docstring); the API of :class:`wbc.state_estimator.StateEstimator`.
 
@@ -716,161 +648,31 @@ class InvariantEkf:
         >>> estimate = estimator.update(record, loads)    # every tick
     """
 
+    config_class = InvariantEkfConfig
+    kernel = _estimate
+    work_size = _WORK_SIZE
+    quaternion_note = "not used after the start (the orientation is the filter's own)"
+    config: InvariantEkfConfig
+
     def __init__(self, config: InvariantEkfConfig | None = None, *,
                  description: Go2Description | None = None, control_period_s: float = 1e-3,
                  **overrides: Any):
-        base = config or InvariantEkfConfig()
-        unknown = sorted(set(overrides) - set(InvariantEkfConfig.field_names()))
-        if unknown:
-            raise ConfigurationError(
-                f"unknown estimator parameter(s) {unknown}; valid parameters: "
-                f"{', '.join(InvariantEkfConfig.field_names())}")
-        self.config = replace(base, **overrides)
-        self.control_period_s = as_float("control_period_s", control_period_s, low=0.0,
-                                         high=0.1, low_inclusive=False)
-        self.legs = LegKinematics(description)
-        self.estimate = StateEstimate()
-        self._params = self.config._vector()
+        super().__init__(config, description=description, control_period_s=control_period_s,
+                         **overrides)
         self._x = np.zeros(_X_SIZE)
         self._x[_QUAT] = 1.0
         self._P = np.zeros((_DIM, _DIM))
-        self._clock = np.array([-1.0, 0.0, 0.0])
-        self._foot_contact = np.ones(4)
-        self._foot_same_s = np.zeros(4)
-        self._foot_good_s = np.zeros(4)
-        self._foot_reason = np.zeros(4, dtype=np.int64)
-        self._foot_last = np.full(4, np.nan)
-        self._joint_q = np.zeros(12)
-        self._joint_dq = np.zeros(12)
-        self._work = np.zeros(_WORK_SIZE)
-        self._input = SensorRecord.zeros()
-        self._schedule = np.zeros(4)
-        self._fresh = True
-        self._described = 0  # the flags the estimate's ``faults`` text describes
-        self._tick: Any = None
-        self.started = False
 
-    # -- start ---------------------------------------------------------------------------
+    def _filter_arrays(self) -> tuple[np.ndarray, ...]:
+        return self._x, self._P
 
-    def reset(self, record: SensorRecord, *, base_xy: tuple[float, float] = (0.0, 0.0),
-              keep_yaw: bool = False) -> StateEstimate:
-        """Start from ``record`` on four loaded feet, at rest (description order).
-
-        Args:
-            record: The first sample: its quaternion and joint angles must be finite and
-                the quaternion a unit one (roll and pitch start from it).
-            base_xy: Where the base is in the estimator's world [m] (the origin by default).
-            keep_yaw: Keep the IMU's yaw; by default the estimator's world has the base's
-                heading at zero.
-
-        Raises:
-            ConfigurationError: A record that cannot start the estimator (the field named).
-        """
-        if not isinstance(record, SensorRecord):
-            raise ConfigurationError(
-                f"record: expected a SensorRecord, received {type(record).__name__}")
-        quat = as_vector("imu_quaternion_wxyz", record.imu_quaternion_wxyz, 4)
-        norm = float(np.linalg.norm(quat))
-        if abs(norm - 1.0) > self.config.quaternion_tolerance:
-            raise ConfigurationError(
-                f"imu_quaternion_wxyz: expected a unit quaternion (w, x, y, z) to start from, "
-                f"received {quat.tolist()} (norm {norm:g})")
-        joint_q = as_vector("q", record.q, 12)
-        as_vector("dq", record.dq, 12)
+    def _start_filter(self, quaternion: np.ndarray, joint_q: np.ndarray,
+                      base_xy: tuple[float, float], keep_yaw: bool) -> None:
         legs = self.legs
-        _start(quat, joint_q, self._params, legs.imu_offset, legs.rotations, legs.translations,
-               legs.axes, legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
-               legs.foot_angular_jacobian, self._x, self._P, float(base_xy[0]),
-               float(base_xy[1]), bool(keep_yaw), self._work)
-        self._foot_contact[:] = 1.0
-        self._foot_same_s[:] = 0.0
-        self._foot_good_s[:] = 0.0
-        self._foot_reason[:] = FOOT_OK
-        self._foot_last[:] = np.nan
-        # The record itself is the first sample.
-        self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0)
-        self._described = 0
-        self.estimate.faults = ""
-        self.started = True
-        self._schedule[:] = np.inf  # four loaded feet
-        return self.update(record, self._schedule)
-
-    # -- the tick ------------------------------------------------------------------------
-
-    def update(self, record: SensorRecord | None, normal_force_bounds: np.ndarray
-               ) -> StateEstimate:
-        """One tick: ``record`` (``None`` when no sample arrived) and the contact schedule.
-
-        Args:
-            record: This period's sample, description order; ``None`` when none came.
-            normal_force_bounds: Each foot's normal-force bound [N] in the controller, in
-                ``LEGS`` order (0 for a foot in swing): the contact schedule.
-
-        Returns:
-            The estimate (the same object every tick, updated in place).
-
-        Raises:
-            ConfigurationError: Not started (call :meth:`reset` first), or a schedule of the
-                wrong shape.
-        """
-        if not self.started:
-            raise ConfigurationError("InvariantEkf.update: call reset(record) first")
-        if normal_force_bounds is not self._schedule:
-            schedule = self._schedule
-            try:
-                schedule[:] = normal_force_bounds
-            except (ValueError, TypeError):
-                raise ConfigurationError(
-                    f"normal_force_bounds: expected 4 numbers (FL, FR, RL, RR) [N], received "
-                    f"{normal_force_bounds!r}") from None
-        if record is None:
-            self._fresh = False
-        else:
-            self._fresh = True
-            if record is not self._input:
-                self._input.copy_from(record)
-        if self._tick is None:
-            self._tick = self._bind()
-        flags = int(self._tick())
-        estimate = self.estimate
-        estimate.flags = flags
-        estimate.trusted = not flags & UNTRUSTED
-        estimate.untrusted_s = float(self._clock[_UNTRUSTED_S])
-        # (A tolerance for the sum of periods: ten 1 ms ticks are 10 ms, not 10.000000000002.)
-        estimate.usable = estimate.untrusted_s <= self.config.trust_timeout_s + 1e-9
-        if flags != self._described:  # the flags carry each foot's reason too
-            self._described = flags
-            estimate.faults = self.describe(flags)
-        return estimate
-
-    def _bind(self) -> Any:
-        """The kernel's compiled overload with every array bound (the record's are the
-        estimator's own input buffers); its scalars are passed per call."""
-        record, legs, estimate = self._input, self.legs, self.estimate
-        arrays = (
-            record.imu_quaternion_wxyz, record.gyroscope_rad_s, record.accelerometer_m_s2,
-            record.q, record.dq, record.foot_force, self._schedule, self.control_period_s,
-            self._params, legs.imu_offset, legs.rotations, legs.translations, legs.axes,
-            legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
-            legs.foot_angular_jacobian, self._clock, self._x, self._P, self._foot_contact,
-            self._foot_same_s, self._foot_good_s, self._foot_reason, self._foot_last,
-            self._joint_q, self._joint_dq, estimate.q, estimate.v, estimate.contact,
-            self._work)
-        compiled = bind_compiled(_estimate, True, 0.0, 0.0, *arrays).func
-        self._tick_arrays = arrays
-
-        def tick() -> int:
-            return compiled(self._fresh, float(record.tick), record.stamp_s, *arrays)
-
-        return tick
-
-    # -- reporting -----------------------------------------------------------------------
-
-    def describe(self, flags: int | None = None) -> str:
-        """What the estimator distrusts, in words ('' when nothing)."""
-        return describe_faults(self.estimate.flags if flags is None else flags, self._input,
-                               self._foot_reason, self.config.quaternion_tolerance,
-                               self.config.quaternion_timeout_s)
+        _start(quaternion, joint_q, self._params, legs.imu_offset, legs.rotations,
+               legs.translations, legs.axes, legs.foot_offsets, legs.foot_position,
+               legs.foot_jacobian, legs.foot_angular_jacobian, self._x, self._P, base_xy[0],
+               base_xy[1], keep_yaw, self._work)
 
     @property
     def gyro_bias(self) -> np.ndarray:

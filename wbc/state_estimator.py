@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
@@ -80,31 +80,21 @@ _QUAT_AGE_S = 17
 _STATE_SIZE = 18
 #: Scratch space of the tick's kernel.
 _WORK_SIZE = 136
-#: ``clock``'s entries: the last sample's tick and stamp, the time without a trusted one.
-_LAST_TICK, _LAST_STAMP, _UNTRUSTED_S = 0, 1, 2
+#: ``clock``'s entry of the time without a trusted sample (see :func:`check_sample`).
+_UNTRUSTED_S = 2
 _GRAVITY = 9.81
 
 
-@known_fields_only("estimator parameter")
 @dataclass(frozen=True)
-class EstimatorConfig:
-    """Every number of the estimator, validated (an error names the field and its range).
+class SensorTrustConfig:
+    """What every estimator here shares: which readings it trusts, how it weighs the feet.
 
     Attributes:
-        orientation_time_constant_s: How fast [s] the orientation follows the IMU's
-            quaternion (the gyroscope carries it in between).
-        gyro_bias_time_constant_s: How fast [s] the gyroscope bias is learnt from it.
         quaternion_tolerance: Largest ``| |quat| - 1 |`` of a quaternion taken as unit.
         quaternion_timeout_s: Time [s] on the gyroscope alone before the orientation is
-            no longer trusted.
-        position_process_noise: Random walk of the IMU's position [m/sqrt(s)].
-        velocity_process_noise: Of its velocity (what the accelerometer misses)
-            [m/s/sqrt(s)].
-        foot_process_noise: Of a stance foot's position (slip, rolling the model misses)
-            [m/sqrt(s)].
+            no longer trusted (an estimator whose orientation needs no quaternion ignores
+            it).
         foot_position_noise_m: Noise of a foot's position from the kinematics [m].
-        foot_velocity_noise_m_s: Noise of the body's velocity from a stance foot [m/s].
-        foot_height_noise_m: Noise of a stance foot's height above the floor [m].
         swing_noise_scale: How much a foot's measurement noise grows at zero contact weight.
         min_contact_weight: Below this weight a foot follows the kinematics freely.
         full_trust_force_n: A stance foot whose normal-force bound [N] is at least this
@@ -125,16 +115,14 @@ class EstimatorConfig:
         foot_radius_m: Radius of the foot spheres [m].
     """
 
-    orientation_time_constant_s: float = 0.05
-    gyro_bias_time_constant_s: float = 10.0
+    #: Valid range of each of the subclass's own numeric fields (low exclusive unless 0).
+    _RANGES: ClassVar[dict[str, tuple[float, float]]] = {}
+    #: The numbers the subclass's kernel reads, in its order.
+    _PARAMS: ClassVar[tuple[str, ...]] = ()
+
     quaternion_tolerance: float = 0.01
     quaternion_timeout_s: float = 1.0
-    position_process_noise: float = 1e-3
-    velocity_process_noise: float = 0.1
-    foot_process_noise: float = 1e-3
     foot_position_noise_m: float = 2e-3
-    foot_velocity_noise_m_s: float = 0.03
-    foot_height_noise_m: float = 2e-3
     swing_noise_scale: float = 100.0
     min_contact_weight: float = 0.02
     full_trust_force_n: float = 30.0
@@ -148,7 +136,7 @@ class EstimatorConfig:
     foot_radius_m: float = FOOT_RADIUS_M
 
     def __post_init__(self) -> None:
-        for name, (low, high) in _RANGES.items():
+        for name, (low, high) in {**_SHARED_RANGES, **self._RANGES}.items():
             as_float(name, getattr(self, name), low=low, high=high, low_inclusive=low == 0.0)
         if not isinstance(self.use_foot_force, bool):
             raise ConfigurationError(
@@ -162,36 +150,68 @@ class EstimatorConfig:
                 f"foot_force_full_scale: expected more than foot_force_on "
                 f"({self.foot_force_on:g}), received {self.foot_force_full_scale:g}")
 
-    @staticmethod
-    def field_names() -> tuple[str, ...]:
+    @classmethod
+    def field_names(cls) -> tuple[str, ...]:
         """Every field's name."""
-        return tuple(f.name for f in fields(EstimatorConfig))
+        return tuple(f.name for f in fields(cls))
 
     def _vector(self) -> np.ndarray:
-        return np.array([getattr(self, name) for name in _PARAMS], dtype=float)
+        return np.array([getattr(self, name) for name in self._PARAMS], dtype=float)
 
 
-#: Valid range of each numeric field (a 0 lower bound is inclusive, others exclusive).
-_RANGES: dict[str, tuple[float, float]] = {
-    "orientation_time_constant_s": (1e-4, 100.0), "gyro_bias_time_constant_s": (1e-3, 1e4),
+#: Valid range of each shared numeric field (a 0 lower bound is inclusive, others exclusive).
+_SHARED_RANGES: dict[str, tuple[float, float]] = {
     "quaternion_tolerance": (1e-6, 0.5), "quaternion_timeout_s": (1e-3, 60.0),
-    "position_process_noise": (1e-9, 10.0), "velocity_process_noise": (1e-9, 100.0),
-    "foot_process_noise": (1e-9, 10.0), "foot_position_noise_m": (1e-9, 1.0),
-    "foot_velocity_noise_m_s": (1e-9, 10.0), "foot_height_noise_m": (1e-9, 1.0),
-    "swing_noise_scale": (1.0, 1e6), "min_contact_weight": (0.0, 1.0),
-    "full_trust_force_n": (1e-3, 1e4), "foot_force_on": (-32768.0, 32767.0),
-    "foot_force_off": (-32768.0, 32767.0), "foot_force_full_scale": (-32768.0, 32767.0),
-    "foot_sensor_stuck_s": (1e-3, 10.0), "foot_sensor_recover_s": (0.0, 60.0),
-    "trust_timeout_s": (0.0, 10.0), "foot_radius_m": (0.0, 0.1),
+    "foot_position_noise_m": (1e-9, 1.0), "swing_noise_scale": (1.0, 1e6),
+    "min_contact_weight": (0.0, 1.0), "full_trust_force_n": (1e-3, 1e4),
+    "foot_force_on": (-32768.0, 32767.0), "foot_force_off": (-32768.0, 32767.0),
+    "foot_force_full_scale": (-32768.0, 32767.0), "foot_sensor_stuck_s": (1e-3, 10.0),
+    "foot_sensor_recover_s": (0.0, 60.0), "trust_timeout_s": (0.0, 10.0),
+    "foot_radius_m": (0.0, 0.1),
 }
-#: The numbers the kernel reads, in its order.
-_PARAMS = ("orientation_time_constant_s", "gyro_bias_time_constant_s", "quaternion_tolerance",
-           "quaternion_timeout_s", "position_process_noise", "velocity_process_noise",
-           "foot_process_noise", "foot_position_noise_m", "foot_velocity_noise_m_s",
-           "foot_height_noise_m", "swing_noise_scale", "min_contact_weight",
-           "full_trust_force_n", "use_foot_force", "foot_force_on", "foot_force_off",
-           "foot_force_full_scale", "foot_sensor_stuck_s", "foot_sensor_recover_s",
-           "foot_radius_m")
+
+
+@known_fields_only("estimator parameter")
+@dataclass(frozen=True)
+class EstimatorConfig(SensorTrustConfig):
+    """Every number of the linear estimator, validated (an error names the field and its
+    range); the shared ones are :class:`SensorTrustConfig`'s.
+
+    Attributes:
+        orientation_time_constant_s: How fast [s] the orientation follows the IMU's
+            quaternion (the gyroscope carries it in between).
+        gyro_bias_time_constant_s: How fast [s] the gyroscope bias is learnt from it.
+        position_process_noise: Random walk of the IMU's position [m/sqrt(s)].
+        velocity_process_noise: Of its velocity (what the accelerometer misses)
+            [m/s/sqrt(s)].
+        foot_process_noise: Of a stance foot's position (slip, rolling the model misses)
+            [m/sqrt(s)].
+        foot_velocity_noise_m_s: Noise of the body's velocity from a stance foot [m/s].
+        foot_height_noise_m: Noise of a stance foot's height above the floor [m].
+    """
+
+    _RANGES: ClassVar[dict[str, tuple[float, float]]] = {
+        "orientation_time_constant_s": (1e-4, 100.0), "gyro_bias_time_constant_s": (1e-3, 1e4),
+        "position_process_noise": (1e-9, 10.0), "velocity_process_noise": (1e-9, 100.0),
+        "foot_process_noise": (1e-9, 10.0), "foot_velocity_noise_m_s": (1e-9, 10.0),
+        "foot_height_noise_m": (1e-9, 1.0),
+    }
+    _PARAMS: ClassVar[tuple[str, ...]] = (
+        "orientation_time_constant_s", "gyro_bias_time_constant_s", "quaternion_tolerance",
+        "quaternion_timeout_s", "position_process_noise", "velocity_process_noise",
+        "foot_process_noise", "foot_position_noise_m", "foot_velocity_noise_m_s",
+        "foot_height_noise_m", "swing_noise_scale", "min_contact_weight",
+        "full_trust_force_n", "use_foot_force", "foot_force_on", "foot_force_off",
+        "foot_force_full_scale", "foot_sensor_stuck_s", "foot_sensor_recover_s",
+        "foot_radius_m")
+
+    orientation_time_constant_s: float = 0.05
+    gyro_bias_time_constant_s: float = 10.0
+    position_process_noise: float = 1e-3
+    velocity_process_noise: float = 0.1
+    foot_process_noise: float = 1e-3
+    foot_velocity_noise_m_s: float = 0.03
+    foot_height_noise_m: float = 2e-3
 
 
 # ----------------------------------------------------------------------------- the kernel
@@ -223,7 +243,8 @@ def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, 
         fresh: A sample arrived (``False``: none this period).
         tick, stamp_s: Its counter and stamp [s].
         quat_in, gyro_in, accel_in, q_in, dq_in: Its IMU and joint readings.
-        clock: In/out: ``(last tick, last stamp [s], untrusted time [s])``.
+        clock: In/out: ``(last tick, last stamp [s], untrusted time [s], time predicted
+            since the last sample [s])``.
         dt_nominal: The control period [s], used when the stamps do not give the step.
         quat_tol: Largest ``| |quat| - 1 |`` of a usable quaternion.
 
@@ -240,11 +261,15 @@ def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, 
         flags |= STALE
         new = False
     if new:
+        # The step from the last sample, less what was predicted since without one.
         elapsed = stamp_s - clock[1]
         if 0.0 < elapsed < 0.1:
-            dt = elapsed
+            dt = max(0.0, elapsed - clock[3])
         clock[0] = tick
         clock[1] = stamp_s
+        clock[3] = 0.0
+    else:
+        clock[3] += dt
     joints_ok = new
     if new:
         for j in range(12):
@@ -590,7 +615,8 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
 
 
 def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
-                    quaternion_tolerance: float, quaternion_timeout_s: float) -> str:
+                    quaternion_tolerance: float, quaternion_timeout_s: float,
+                    quaternion_note: str = "orientation from the gyroscope") -> str:
     """A tick's fault flags in words ('' when none), with the readings that raised them.
 
     Args:
@@ -599,6 +625,7 @@ def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
         foot_reason: Why each foot sensor is distrusted (``FOOT_*``), ``LEGS`` order.
         quaternion_tolerance: The estimator's unit-norm tolerance.
         quaternion_timeout_s: Its time [s] on the gyroscope alone.
+        quaternion_note: What the estimator does without the IMU's quaternion.
     """
     parts = []
     if flags & NO_DATA:
@@ -616,11 +643,11 @@ def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
                      "predicting without it")
     if flags & QUATERNION_NON_FINITE:
         parts.append(f"IMU quaternion non-finite ({record.imu_quaternion_wxyz.tolist()}): "
-                     "orientation from the gyroscope")
+                     f"{quaternion_note}")
     if flags & QUATERNION_NOT_UNIT:
         norm = float(np.linalg.norm(record.imu_quaternion_wxyz))
         parts.append(f"IMU quaternion not unit (norm {norm:.4g}, tolerance "
-                     f"{quaternion_tolerance:g}): orientation from the gyroscope")
+                     f"{quaternion_tolerance:g}): {quaternion_note}")
     if flags & QUATERNION_TIMEOUT:
         parts.append(f"no valid IMU quaternion for more than {quaternion_timeout_s:g} s")
     for i, leg in enumerate(LEGS):
@@ -663,45 +690,46 @@ class StateEstimate:
         self.faults = ""
 
 
-class StateEstimator:
-    """The base's state from a GO2's sensors (see the module docstring).
+class EstimatorBase:
+    """What the estimators share: their inputs, the foot sensors' state, the clock, the
+    bound compiled tick, :meth:`reset` and :meth:`update`.
+
+    A subclass names its config class (``config_class``) and compiled tick (``kernel``),
+    and gives :meth:`_filter_arrays` (its filter's arrays, passed to the kernel between the
+    clock and the foot sensors' state) and :meth:`_start_filter`.
 
     Args:
-        config: Every number (defaults when ``None``); see :class:`EstimatorConfig`.
+        config: Every number (the config class's defaults when ``None``).
         description: The robot (its legs, feet and IMU frame); the installed GO2 by default.
         control_period_s: The time [s] between samples when their stamps do not say.
-        **overrides: Fields of :class:`EstimatorConfig` to change.
-
-    Example:
-        >>> estimator = StateEstimator(control_period_s=2e-3)
-        >>> estimator.reset(record)                       # four feet on the floor
-        >>> loads = np.zeros(4)
-        >>> controller.normal_force_bounds(loads)         # the contact schedule
-        >>> estimate = estimator.update(record, loads)    # every tick
-        >>> out = controller.step(estimate.q, estimate.v)
+        **overrides: Fields of the config to change.
     """
 
-    def __init__(self, config: EstimatorConfig | None = None, *,
+    config_class: ClassVar[type[SensorTrustConfig]] = SensorTrustConfig
+    kernel: ClassVar[Any] = None
+    #: What the estimator does without the IMU's quaternion (the fault text says it).
+    quaternion_note: ClassVar[str] = "orientation from the gyroscope"
+    #: The kernel's scratch space [floats].
+    work_size: ClassVar[int] = 0
+
+    def __init__(self, config: SensorTrustConfig | None = None, *,
                  description: Go2Description | None = None, control_period_s: float = 1e-3,
                  **overrides: Any):
-        base = config or EstimatorConfig()
-        unknown = sorted(set(overrides) - set(EstimatorConfig.field_names()))
+        base = config or self.config_class()
+        unknown = sorted(set(overrides) - set(self.config_class.field_names()))
         if unknown:
             raise ConfigurationError(
                 f"unknown estimator parameter(s) {unknown}; valid parameters: "
-                f"{', '.join(EstimatorConfig.field_names())}")
+                f"{', '.join(self.config_class.field_names())}")
         self.config = replace(base, **overrides)
         self.control_period_s = as_float("control_period_s", control_period_s, low=0.0,
                                          high=0.1, low_inclusive=False)
         self.legs = LegKinematics(description)
         self.estimate = StateEstimate()
         self._params = self.config._vector()
-        self._state = np.zeros(_STATE_SIZE)
-        self._state[_QUAT] = 1.0
-        self._state[_ALIGN] = 1.0
-        self._clock = np.array([-1.0, 0.0, 0.0])
-        self._x = np.zeros((3, 6))
-        self._P = np.zeros((3, 6, 6))
+        #: Last sample's tick and stamp [s], time without a trusted one [s], time predicted
+        #: since the last sample [s].
+        self._clock = np.array([-1.0, 0.0, 0.0, 0.0])
         self._foot_contact = np.ones(4)
         self._foot_same_s = np.zeros(4)
         self._foot_good_s = np.zeros(4)
@@ -709,13 +737,20 @@ class StateEstimator:
         self._foot_last = np.full(4, np.nan)
         self._joint_q = np.zeros(12)
         self._joint_dq = np.zeros(12)
-        self._work = np.zeros(_WORK_SIZE)
+        self._work = np.zeros(self.work_size)
         self._input = SensorRecord.zeros()
         self._schedule = np.zeros(4)
         self._fresh = True
         self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
+
+    def _filter_arrays(self) -> tuple[np.ndarray, ...]:
+        raise NotImplementedError
+
+    def _start_filter(self, quaternion: np.ndarray, joint_q: np.ndarray,
+                      base_xy: tuple[float, float], keep_yaw: bool) -> None:
+        raise NotImplementedError
 
     # -- start ---------------------------------------------------------------------------
 
@@ -731,7 +766,8 @@ class StateEstimator:
                 heading at zero.
 
         Raises:
-            ConfigurationError: A record that cannot start the estimator (the field named).
+            ConfigurationError: A record that cannot start the estimator (the field named);
+                nothing is changed.
         """
         if not isinstance(record, SensorRecord):
             raise ConfigurationError(
@@ -744,18 +780,15 @@ class StateEstimator:
                 f"received {quat.tolist()} (norm {norm:g})")
         joint_q = as_vector("q", record.q, 12)
         as_vector("dq", record.dq, 12)
-        legs = self.legs
-        _start(quat, joint_q, self._params, legs.imu_offset, legs.rotations, legs.translations,
-               legs.axes, legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
-               legs.foot_angular_jacobian, self._state, self._x, self._P,
-               float(base_xy[0]), float(base_xy[1]), bool(keep_yaw))
+        self._start_filter(quat, joint_q, (float(base_xy[0]), float(base_xy[1])),
+                           bool(keep_yaw))
         self._foot_contact[:] = 1.0
         self._foot_same_s[:] = 0.0
         self._foot_good_s[:] = 0.0
         self._foot_reason[:] = FOOT_OK
         self._foot_last[:] = np.nan
         # The record itself is the first sample.
-        self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0)
+        self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0, 0.0)
         self._described = 0
         self.estimate.faults = ""
         self.started = True
@@ -782,7 +815,8 @@ class StateEstimator:
                 wrong shape.
         """
         if not self.started:
-            raise ConfigurationError("StateEstimator.update: call reset(record) first")
+            raise ConfigurationError(
+                f"{type(self).__name__}.update: call reset(record) first")
         if normal_force_bounds is not self._schedule:
             schedule = self._schedule
             try:
@@ -820,11 +854,11 @@ class StateEstimator:
             record.q, record.dq, record.foot_force, self._schedule, self.control_period_s,
             self._params, legs.imu_offset, legs.rotations, legs.translations, legs.axes,
             legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
-            legs.foot_angular_jacobian, self._clock, self._state, self._x, self._P,
+            legs.foot_angular_jacobian, self._clock, *self._filter_arrays(),
             self._foot_contact, self._foot_same_s, self._foot_good_s, self._foot_reason,
             self._foot_last, self._joint_q, self._joint_dq, estimate.q, estimate.v,
             estimate.contact, self._work)
-        compiled = bind_compiled(_estimate, True, 0.0, 0.0, *arrays).func
+        compiled = bind_compiled(self.kernel, True, 0.0, 0.0, *arrays).func
         self._tick_arrays = arrays
 
         def tick() -> int:
@@ -835,10 +869,57 @@ class StateEstimator:
     # -- reporting -----------------------------------------------------------------------
 
     def describe(self, flags: int | None = None) -> str:
-        """What the estimator distrusts, in words ('' when nothing)."""
+        """What the estimator distrusts this tick, in words ('' when nothing), with the
+        readings of the last sample that arrived."""
         return describe_faults(self.estimate.flags if flags is None else flags, self._input,
                                self._foot_reason, self.config.quaternion_tolerance,
-                               self.config.quaternion_timeout_s)
+                               self.config.quaternion_timeout_s, self.quaternion_note)
+
+
+class StateEstimator(EstimatorBase):
+    """The base's state from a GO2's sensors (see the module docstring).
+
+    Args:
+        config: Every number (defaults when ``None``); see :class:`EstimatorConfig`.
+        description: The robot (its legs, feet and IMU frame); the installed GO2 by default.
+        control_period_s: The time [s] between samples when their stamps do not say.
+        **overrides: Fields of :class:`EstimatorConfig` to change.
+
+    Example:
+        >>> estimator = StateEstimator(control_period_s=2e-3)
+        >>> estimator.reset(record)                       # four feet on the floor
+        >>> loads = np.zeros(4)
+        >>> controller.normal_force_bounds(loads)         # the contact schedule
+        >>> estimate = estimator.update(record, loads)    # every tick
+        >>> out = controller.step(estimate.q, estimate.v)
+    """
+
+    config_class = EstimatorConfig
+    kernel = _estimate
+    work_size = _WORK_SIZE
+    config: EstimatorConfig
+
+    def __init__(self, config: EstimatorConfig | None = None, *,
+                 description: Go2Description | None = None, control_period_s: float = 1e-3,
+                 **overrides: Any):
+        super().__init__(config, description=description, control_period_s=control_period_s,
+                         **overrides)
+        self._state = np.zeros(_STATE_SIZE)
+        self._state[_QUAT] = 1.0
+        self._state[_ALIGN] = 1.0
+        self._x = np.zeros((3, 6))
+        self._P = np.zeros((3, 6, 6))
+
+    def _filter_arrays(self) -> tuple[np.ndarray, ...]:
+        return self._state, self._x, self._P
+
+    def _start_filter(self, quaternion: np.ndarray, joint_q: np.ndarray,
+                      base_xy: tuple[float, float], keep_yaw: bool) -> None:
+        legs = self.legs
+        _start(quaternion, joint_q, self._params, legs.imu_offset, legs.rotations,
+               legs.translations, legs.axes, legs.foot_offsets, legs.foot_position,
+               legs.foot_jacobian, legs.foot_angular_jacobian, self._state, self._x, self._P,
+               base_xy[0], base_xy[1], keep_yaw)
 
     @property
     def gyro_bias(self) -> np.ndarray:
