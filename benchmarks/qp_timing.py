@@ -2,7 +2,9 @@
 
 Run ``python -m benchmarks.qp_timing [--quick] [--json PATH] [--plot PATH]``.
 
-Four tables, all measured through the library's public API:
+Four tables, all measured through the library's public API, every controller reading the
+state estimated from the default plant's simulated sensors (the loop's default estimator),
+every quality figure measured on the simulator's truth:
 
 1. Backends: one closed-loop episode per backend (200 standing warm-up ticks, excluded from
    the statistics, then a ``LegLift`` of leg FR to 0.40 m at 1 kHz, motor commands to the
@@ -10,7 +12,7 @@ Four tables, all measured through the library's public API:
    returned QP solution is checked against the problem it solved. The full mode runs the
    whole lift with a 2 s hold; ``--quick`` shifts in 0.5 s, unloads in 0.3 s and stops after 1.0 s of the lift
    (the first 0.2 s of the raise), so that the one-shot OSQP (~4 ms a tick) stays short.
-2. Alone, on recorded states: one closed-loop lift's measured states replayed into fresh
+2. Alone, on recorded states: one closed-loop lift's estimated states replayed into fresh
    controllers (the default; DAQP with its hot start; the full QP without the elimination;
    PlaCo), with no simulation between ticks: the controller's own time, caches warm.
 3. Scaling: tick time against the number of contacts (four feet standing; three with the
@@ -39,8 +41,9 @@ from typing import Any
 
 import numpy as np
 
-from sim.episode_metrics import EpisodeMetrics
-from sim.simulator import Go2Simulator
+from actions.high_five_behaviour import PHASE_NAMES
+from sim.control_loop import ControlLoop
+from sim.run_recorder import MetricsHook
 from wbc import (
     BalanceController,
     ControllerConfig,
@@ -149,11 +152,10 @@ def _record(episode: Episode, controller: BalanceController, out: Any, cpu_s: fl
         episode.violations.append(violation)
 
 
-def _foot_target(controller: BalanceController, leg: str) -> np.ndarray:
-    """The controller's current swing-foot target (the protocol has no getter for it)."""
-    task = controller.foot_tasks[leg]  # type: ignore[attr-defined]
-    target = task.target if isinstance(controller, WholeBodyController) else task.target_world
-    return np.asarray(target, dtype=float).reshape(3)
+def _loop(controller: BalanceController) -> ControlLoop:
+    """The default plant and sensors around ``controller``, which reads the estimated state
+    (the loop's pieces are driven by hand: read, step, write)."""
+    return ControlLoop.simulated(controller=controller)
 
 
 def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: float | None,
@@ -169,42 +171,37 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
             :class:`sim.episode_metrics.EpisodeMetrics` (its MuJoCo queries are excluded
             from the real-time factor).
     """
-    sim = Go2Simulator()
-    episode = Episode()
     clocks = time.process_time(), time.perf_counter()
     wall = time.perf_counter()
-    q, v = sim.state()
-    controller.reset(q)
+    loop = _loop(controller)  # resets the controller
+    sim, robot = loop.sim, loop.robot
+    episode = Episode()
     for _ in range(WARMUP_TICKS):
-        q, v = sim.state()
-        sim.step_command(controller.step(q, v))
+        robot.write_command(controller.step(*loop.read_state()))
     episode.control_wall_s += time.perf_counter() - wall
     lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
     lift.start(sim.time_s)
     start = sim.time_s
-    meter = EpisodeMetrics(sim, sim.description.effort_limit) if quality else None
+    phase_name = [""]
+    meter = MetricsHook(loop, lambda: phase_name[0], LEG) if quality else None
     while lift.phase is not LiftPhase.DONE:
         if stop_after_s is not None and sim.time_s - start >= stop_after_s - 1e-9:
             break
         wall = time.perf_counter()
         phase = lift.update(sim.time_s)
-        q, v = sim.state()
+        q, v = loop.read_state()
         out, cpu_s = _timed_step(controller, q, v)
-        sim.step_command(out)
+        robot.write_command(out)
         episode.control_wall_s += time.perf_counter() - wall
         _record(episode, controller, out, cpu_s)
-        if meter is not None:
-            error = None
-            if phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
-                error = float(np.linalg.norm(sim.foot_positions()[LEG]
-                                             - _foot_target(controller, LEG)))
-            meter.record(out, stance_legs=controller.support_legs(), foot_error_m=error,
-                         holding=phase is LiftPhase.HOLDING)
+        if meter is not None:  # measured on the truth
+            phase_name[0] = PHASE_NAMES.get(phase, "")
+            meter(loop, out)
     episode.sim_s = sim.time_s
     episode.cpu_share = ((time.process_time() - clocks[0])
                          / max(time.perf_counter() - clocks[1], 1e-9))
     if meter is not None:
-        episode.metrics = meter.summary(episode.control_wall_s).as_dict()
+        episode.metrics = meter.metrics.summary(episode.control_wall_s).as_dict()
         episode.metrics["lift_completed"] = lift.phase is LiftPhase.DONE
     return episode
 
@@ -253,21 +250,23 @@ class Recording:
 
 
 def record_lift(*, hold_s: float, timing: LegLiftTiming | None) -> Recording:
-    """The default controller lifts FR on the default plant; every lift tick's state."""
-    sim, controller = Go2Simulator(), WholeBodyController()
-    controller.reset(sim.state()[0])
+    """The default controller lifts FR on the default plant and sensors; every lift tick's
+    estimated state (what the controller read)."""
+    controller = WholeBodyController()
+    loop = _loop(controller)
+    sim = loop.sim
     for _ in range(WARMUP_TICKS):
-        sim.step_command(controller.step(*sim.state()))
+        loop.robot.write_command(controller.step(*loop.read_state()))
     lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
     lift.start(sim.time_s)
     qs, vs, ts = [], [], []
     while lift.phase is not LiftPhase.DONE:
         lift.update(sim.time_s)
-        q, v = sim.state()
+        q, v = loop.read_state()
         qs.append(q)
         vs.append(v)
         ts.append(sim.time_s)
-        sim.step_command(controller.step(q, v))
+        loop.robot.write_command(controller.step(q, v))
     return Recording(np.array(qs), np.array(vs), np.array(ts))
 
 
@@ -330,18 +329,17 @@ def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
                 ) -> list[dict[str, Any]]:
     """Tick times standing on four feet, then with FR held up (swing task on, then off)."""
     controller = factory()
-    sim = Go2Simulator()
-    q, _ = sim.state()
-    controller.reset(q)
+    loop = _loop(controller)
+    sim = loop.sim
 
     def tick(n: int) -> tuple[list[float], list[float]]:
         times, cpu_times = [], []
         for _ in range(n):
             if lift is not None:
                 lift.update(sim.time_s)
-            q, v = sim.state()
+            q, v = loop.read_state()
             out, cpu_s = _timed_step(controller, q, v)
-            sim.step_command(out)
+            loop.robot.write_command(out)
             times.append(out.timings["total"])
             cpu_times.append(cpu_s)
         return times, cpu_times
@@ -513,30 +511,30 @@ def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | N
     """
     runs = {}
     for name, factory in ((DEFAULT, WholeBodyController), (PLACO, PlacoController)):
-        sim, controller = Go2Simulator(), factory()
-        controller.reset(sim.state()[0])
+        controller = factory()
+        loop = _loop(controller)
         for _ in range(WARMUP_TICKS):
-            sim.step_command(controller.step(*sim.state()))
+            loop.robot.write_command(controller.step(*loop.read_state()))
         lift = LegLift(controller, leg=LEG, height_m=HEIGHT_M, hold_s=hold_s, timing=timing)
-        lift.start(sim.time_s)
-        runs[name] = (sim, controller, lift, sim.time_s, [])
+        lift.start(loop.sim.time_s)
+        runs[name] = (loop, controller, lift, loop.sim.time_s, [])
 
     def running(run: tuple) -> bool:
-        sim, _, lift, start, _ = run
+        loop, _, lift, start, _ = run
         return lift.phase is not LiftPhase.DONE and (
-            stop_after_s is None or sim.time_s - start < stop_after_s - 1e-9)
+            stop_after_s is None or loop.sim.time_s - start < stop_after_s - 1e-9)
 
     while any(running(run) for run in runs.values()):
         for run in runs.values():
-            sim, controller, lift, _, samples = run
+            loop, controller, lift, _, samples = run
             for _ in range(block_ticks):
                 if not running(run):
                     break
-                lift.update(sim.time_s)
-                q, v = sim.state()
+                lift.update(loop.sim.time_s)
+                q, v = loop.read_state()
                 out, _ = _timed_step(controller, q, v)
                 samples.append(out.timings["total"])
-                sim.step_command(out)
+                loop.robot.write_command(out)
     default, placo = runs[DEFAULT][4], runs[PLACO][4]
     blocks = min(len(default), len(placo)) // block_ticks
     ratios = [float(np.median(default[i * block_ticks:(i + 1) * block_ticks])

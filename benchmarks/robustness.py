@@ -453,7 +453,9 @@ def format_report(report: dict[str, Any]) -> str:
              f"{report['goal']['target_height_m']:.2f} m high five)")
     outcome = {(f"{c['impulse_ns']:g}", str(c["direction_deg"])): c["outcome"]
                for c in grid["cells"]}
-    lines = [title, "S succeeded, A aborted (foot put down, robot up), F fell", "",
+    lines = [(f"State: estimated ({DEFAULT_ESTIMATOR}) from the {DEFAULT_SENSORS} sensors unless "
+              "a row says otherwise; everything measured on the simulator's truth"), "",
+             title, "S succeeded, A aborted (foot put down, robot up), F fell", "",
              *push_grid_lines([str(d) for d in grid["directions_deg"]],
                               [f"{i:g}" for i in grid["impulses_ns"]],
                               lambda impulse, direction: outcome[impulse, direction])]

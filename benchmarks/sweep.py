@@ -44,7 +44,9 @@ from benchmarks.sweep_spec import (
     cli_values,
     value_text,
 )
+from sim.sensors import DEFAULT_SENSORS
 from wbc.errors import ConfigurationError
+from wbc.estimators import DEFAULT_ESTIMATOR
 
 #: Exit statuses: done; an episode raised (its record says what; run again to retry);
 #: usage error; interrupted (run again to resume).
@@ -280,6 +282,17 @@ def _spec(args: argparse.Namespace) -> SweepSpec:
     return spec.with_values(overrides) if overrides else spec
 
 
+def state_line(spec: SweepSpec) -> str:
+    """Where the episodes' controller state comes from, and which sensors."""
+    def values(path: str, default: str) -> str:
+        axis = spec.axis(path)
+        return default if axis is None else ", ".join(value_text(v) for v in axis.values)
+
+    return (f"state: {values('sensors.state', 'estimate')} ({DEFAULT_ESTIMATOR} when "
+            f"estimated), sensors {values('sensors.preset', DEFAULT_SENSORS)}; measured on "
+            "the simulator's truth")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point; returns the exit status."""
     parser = build_parser()
@@ -290,6 +303,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ConfigurationError as err:
         parser.error(_option(str(err)))
     episodes = unique_episodes(spec)
+    print(state_line(spec))
     if args.dry_run:
         print(f"{spec.name}: {len(episodes)} episodes")
         for axis in spec.axes:

@@ -7,7 +7,7 @@ built-in centre-of-mass task keeps the CoM over the feet on x and y.
 
 from __future__ import annotations
 
-from sim.simulator import Go2Simulator
+from sim.control_loop import ControlLoop
 from tasks import RobotKinematics, Task
 from wbc import WholeBodyController
 
@@ -37,16 +37,21 @@ class BaseHeightTask(Task):
 def run(*, raise_m: float = 0.04, ramp_s: float = 1.0, settle_s: float = 1.0,
         with_task: bool = True) -> dict[str, float]:
     """Stand, raise the base by ``raise_m`` over ``ramp_s``, hold ``settle_s``; returns a
-    summary: start and end base height [m], target [m], QP failures, worst violation."""
-    sim = Go2Simulator()
+    summary: start and end base height [m] (the simulator's truth), target [m], QP
+    failures, worst violation.
+
+    The controller reads the state estimated from the simulated GO2's sensors, as it would
+    on a robot; the loop's pieces are driven by hand: read, step, write.
+    """
     controller = WholeBodyController()
     height = BaseHeightTask()
     if with_task:
         controller.add_task(height)
         controller.com_task.row_weights[2] = 0.0   # the CoM height is the new task's job
-    q, v = sim.state()
-    controller.reset(q)
+    loop = ControlLoop.simulated(controller=controller)   # resets the controller
+    q, v = loop.read_state()
     start = float(q[2])
+    true_start = float(loop.true_state()[0][2])
     height.set_target(start)
     failures, violation = 0, 0.0
     ticks = round((ramp_s + settle_s) / controller.config.control_period_s)
@@ -56,12 +61,14 @@ def run(*, raise_m: float = 0.04, ramp_s: float = 1.0, settle_s: float = 1.0,
         # A smooth (cubic) ramp of the target, with its velocity.
         height.set_target(start + raise_m * (3 * s**2 - 2 * s**3),
                           raise_m * 6 * s * (1 - s) / ramp_s)
-        out = controller.step(*sim.state())
+        out = controller.step(q, v)
         failures += not out.ok
         violation = max(violation, *controller.problem.violations(controller.last_solution))
-        sim.step_command(out)
-    return {"start_m": start, "end_m": float(sim.state()[0][2]), "target_m": start + raise_m,
-            "failures": failures, "max_violation": violation}
+        loop.robot.write_command(out)
+        q, v = loop.read_state()
+    return {"start_m": true_start, "end_m": float(loop.true_state()[0][2]),
+            "target_m": true_start + raise_m, "failures": failures,
+            "max_violation": violation}
 
 
 if __name__ == "__main__":

@@ -61,7 +61,7 @@ class TickRecorder:
         margin = (shrunk_signed_distance(loaded, sim.data.subtree_com[1])
                   if len(loaded) >= 3 else math.nan)
         tracking = phase in TRACKING_PHASES
-        target = loop.controller.foot_tasks[self.leg].target if tracking else None
+        target = loop.controller.foot_target(self.leg) if tracking else None
         row = self.rows
         row["t_s"].append(loop.context.now_s)
         row["q"].append(np.array(loop.context.q))
@@ -119,7 +119,7 @@ class MetricsHook:
         phase = self.phase_of()
         error = None
         if phase in TRACKING_PHASES:
-            target = self.alignment.point_to_true(loop.controller.foot_tasks[self.leg].target)
+            target = self.alignment.point_to_true(loop.controller.foot_target(self.leg))
             foot = loop.sim.foot_position_array()[self._row]
             error = float(np.linalg.norm(foot - target))
         errors = self.metrics.estimate_errors

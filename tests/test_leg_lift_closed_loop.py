@@ -1,26 +1,34 @@
-"""Closed loop in MuJoCo at 1 kHz: stand, and lift a foot through every phase and back."""
+"""Closed loop in MuJoCo at 1 kHz: stand, and lift a foot through every phase and back.
+
+The controller reads the state estimated from the simulated sensors; every bound is
+measured on the simulator's truth.
+"""
 
 import numpy as np
 import pytest
 
-from sim.simulator import Go2Simulator
+from sim.control_loop import ControlLoop
 from tests.closed_loop import run_lift, settle
-from wbc import LegLift, LiftPhase, WholeBodyController
+from wbc import LegLift, LiftPhase
 from wbc.errors import ConfigurationError, ReachabilityError, UnknownNameError
 
 ALL_PHASES = [LiftPhase.SHIFTING, LiftPhase.UNLOADING, LiftPhase.RAISING, LiftPhase.HOLDING,
               LiftPhase.LOWERING, LiftPhase.RELOADING, LiftPhase.SHIFTING_BACK, LiftPhase.DONE]
 
 
+def standing_loop() -> ControlLoop:
+    loop = ControlLoop.simulated()
+    settle(loop, 0.01)
+    return loop
+
+
 def test_stands_five_seconds_with_drift_under_5_mm():
-    sim = Go2Simulator()
-    controller = WholeBodyController()
-    controller.reset(sim.state()[0])
-    settle(sim, controller, 0.2)
-    start = sim.state()[0][:3]
-    settle(sim, controller, 5.0)
-    assert np.linalg.norm(sim.state()[0][:3] - start) < 0.005
-    assert controller.failures == 0
+    loop = ControlLoop.simulated()
+    settle(loop, 0.2)
+    start = loop.true_state()[0][:3]
+    settle(loop, 5.0)
+    assert np.linalg.norm(loop.true_state()[0][:3] - start) < 0.005
+    assert loop.controller.failures == 0
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +37,7 @@ def high_five():
 
 
 def test_high_five_goes_through_every_phase(high_five):
-    summary, sim, controller, lift, phases, _ = high_five
+    summary, loop, controller, lift, phases, _ = high_five
     assert phases == ALL_PHASES
     assert lift.progress == 1.0
     assert controller.stance_legs == ["FL", "FR", "RL", "RR"]
@@ -52,20 +60,20 @@ def test_high_five_quality(high_five):
 
 
 def test_high_five_reaches_its_target_in_front_of_the_shoulder(high_five):
-    _, sim, controller, lift, _, _ = high_five
+    _, loop, controller, lift, _, _ = high_five
     assert lift.foot_target[2] == pytest.approx(0.40)
     shoulder = lift.shoulder_while_holding
     assert lift.foot_target[0] > shoulder[0] + 0.1
     assert abs(lift.foot_target[1] - shoulder[1]) < 0.02
     # Back on the ground, loaded, where it started.
-    forces = sim.foot_contact_forces()
+    forces = loop.sim.foot_contact_forces()
     assert forces["FR"][2] > 30.0
-    assert np.linalg.norm(sim.foot_positions()["FR"][:2] - lift.foot_ground[:2]) < 0.006
+    assert np.linalg.norm(loop.sim.foot_positions()["FR"][:2] - lift.foot_ground[:2]) < 0.006
 
 
 @pytest.mark.parametrize("leg", ["FL", "RL", "RR"])
 def test_any_leg_can_be_raised(leg):
-    s, sim, controller, lift, phases, _ = run_lift(leg, height_m=0.25, hold_s=0.2)
+    s, loop, controller, lift, phases, _ = run_lift(leg, height_m=0.25, hold_s=0.2)
     assert phases == ALL_PHASES
     assert not s.fell and s.qp_failures == 0
     assert s.raised_foot_rms_mm <= 5.0
@@ -74,20 +82,20 @@ def test_any_leg_can_be_raised(leg):
 
 @pytest.mark.parametrize("at_s", [0.5, 1.2, 2.0, 3.5])
 def test_interrupted_lift_returns_to_four_loaded_feet_within_1_5_s(at_s):
-    s, sim, controller, lift, phases, interrupted_in = run_lift("FR", hold_s=2.0, interrupt_at_s=at_s)
+    s, loop, controller, lift, phases, interrupted_in = run_lift("FR", hold_s=2.0,
+                                                                  interrupt_at_s=at_s)
     assert interrupted_in in (LiftPhase.SHIFTING, LiftPhase.UNLOADING, LiftPhase.RAISING,
                               LiftPhase.HOLDING)
     assert not s.fell and s.qp_failures == 0
     assert lift.interrupted and lift.phase is LiftPhase.DONE
     # The unwind is bounded: it ended within 1.5 s of the request (plus the 0.3 s settle).
-    assert sim.time_s - 0.3 - at_s <= 1.5 + 1e-9
-    assert sim.foot_contact_forces()["FR"][2] >= 30.0
+    assert loop.sim.time_s - 0.3 - at_s <= 1.5 + 1e-9
+    assert loop.sim.foot_contact_forces()["FR"][2] >= 30.0
 
 
 def test_lift_validation():
-    sim = Go2Simulator()
-    controller = WholeBodyController()
-    controller.reset(sim.state()[0])
+    loop = ControlLoop.simulated()
+    controller = loop.controller
     with pytest.raises(ConfigurationError, match="height_m: expected a value in \\[0.1, 0.5\\], received 0.7"):
         LegLift(controller, height_m=0.7)
     with pytest.raises(UnknownNameError, match="unknown leg 'XL'"):
@@ -96,16 +104,13 @@ def test_lift_validation():
         LegLift(controller, forward_m=0.5)
     # The highest, farthest allowed target is still within the leg's reach.
     lift = LegLift(controller, height_m=0.5, forward_m=0.3, lateral_m=0.15)
-    settle(sim, controller, 0.01)
-    lift.start(sim.time_s)
+    settle(loop, 0.01)
+    lift.start(loop.sim.time_s)
     assert np.linalg.norm(lift.foot_target - controller.shoulder_position("FR")) < 0.40
 
 
 def test_unreachable_foot_target_is_refused_by_the_controller():
-    sim = Go2Simulator()
-    controller = WholeBodyController()
-    controller.reset(sim.state()[0])
-    settle(sim, controller, 0.01)
+    controller = standing_loop().controller
     with pytest.raises(ReachabilityError, match="from the FR shoulder; reachable: at most 0.40 m"):
         controller.set_foot_target("FR", controller.shoulder_position("FR") + [0.3, 0.0, 0.3])
     assert controller.stance_legs == ["FL", "FR", "RL", "RR"]  # nothing half-done

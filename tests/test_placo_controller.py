@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sim.control_loop import ControlLoop
 from sim.simulator import Go2Simulator
 from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlStatus
@@ -40,16 +41,16 @@ def test_foot_positions_are_the_feet_in_leg_order(standing):
     np.testing.assert_array_equal(controller.foot_target("FR"), target)
 
 
-def test_stands_two_seconds_in_mujoco(standing, description):
-    controller, sim = standing
-    q0, _ = sim.state()
+def test_stands_two_seconds_in_mujoco(controller, description):
+    """On the state estimated from the simulated sensors; measured on the truth."""
+    loop = ControlLoop.simulated(controller=controller)
+    q0, _ = loop.true_state()
     statuses = set()
     for _ in range(2000):
-        q, v = sim.state()
-        out = controller.step(q, v)
+        out = loop.command(*loop.read_state())
         statuses.add(out.status)
-        sim.step_command(out)
-    q, _ = sim.state()
+        loop.robot.write_command(out)
+    q, _ = loop.true_state()
     assert statuses == {ControlStatus.OK}
     assert np.linalg.norm(q[:3] - q0[:3]) < 5e-3
     # The four QP forces carry the robot's weight.

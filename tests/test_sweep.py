@@ -61,6 +61,11 @@ def serial(tmp_path_factory):
                            after_interrupt=after_interrupt, controllers=controllers)
 
 
+#: What a sweep prints first.
+STATE_LINE = ("state: estimate (inekf when estimated), sensors go2; measured on the simulator's "
+              "truth")
+
+
 def by_key(path) -> dict[str, dict]:
     return {r["key"]: r for r in map(json.loads, path.read_text().splitlines())}
 
@@ -100,7 +105,8 @@ def test_the_process_pool_gives_the_serial_results(serial, tmp_path, capsys):
     for key, record in by_key(path).items():
         assert record["result"] == serial.run.records[key]["result"], record["axes"]
     lines = out.splitlines()
-    assert lines[3:6] == QUICK_TABLE and QUICK_TOTALS in lines
+    assert lines[0] == STATE_LINE
+    assert lines[4:7] == QUICK_TABLE and QUICK_TOTALS in lines
     assert "4 episodes: 4 run in " in out and " s wall on process pool (2 processes)" in out
     assert "quick: 100%" in err and "4/4" in err and "fell 0, aborted 2" in err  # the bar
     png = path.with_suffix(".png")
@@ -120,7 +126,7 @@ def test_ray_gives_the_serial_results(serial, tmp_path, capsys, monkeypatch):
     for key, record in by_key(path).items():
         assert record["result"] == serial.run.records[key]["result"], record["axes"]
         assert record["worker"].rpartition(":")[2] != str(os.getpid())  # in Ray's workers
-    assert len(by_key(path)) == 4 and out.splitlines()[3:6] == QUICK_TABLE
+    assert len(by_key(path)) == 4 and out.splitlines()[4:7] == QUICK_TABLE
 
 
 def test_an_episode_that_raises_is_recorded_and_retried_on_resume(tmp_path, monkeypatch,
@@ -200,5 +206,6 @@ def test_a_bad_sweep_is_a_one_line_usage_error(args, message, capsys):
 def test_a_dry_run_lists_the_fields_and_counts_the_episodes(capsys):
     assert main(["pushes", "--plant", "payload_kg=0,2", "--dry-run"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0] == "pushes: 80 episodes"
+    assert out[0] == STATE_LINE
+    assert out[1] == "pushes: 80 episodes"
     assert "  pushes.impulses_ns: 2, 4, 6, 8, 10" in out and "  plant.payload_kg: 0, 2" in out

@@ -150,11 +150,33 @@ def test_built_in_sweeps_and_the_example_files_load():
     ({"holds": 1}, ("holds: unknown field; valid fields: height_m, hold_s, seed, metrics, "
                     "pushes, plant, sensors, gains")),
     ({"plant": [1, 2]}, "plant: expected a mapping of name: values, received [1, 2]"),
+    ({"sensors": {"preset": "go1"}},
+     "sensors.preset: unknown sensor preset 'go1'; valid presets: go2, exact"),
+    ({"sensors": {"state": "exact"}},
+     "sensors.state: unknown state source 'exact'; valid: estimate, truth"),
+    ({"sensors": {"gyro_noise_rad_s": [0.01, 2]}},
+     "sensors.gyro_noise_rad_s: expected a value in [0, 1], received 2"),
+    ({"sensors": {"gyro": 1}},
+     "sensors.gyro: unknown sensor parameter 'gyro'; valid: preset, state, gyro_noise_rad_s, "),
+    ({"plant": {"position_noise_rad": 0.01}},
+     "plant.position_noise_rad: unknown plant parameter 'position_noise_rad'; valid: "),
 ])
 def test_a_bad_spec_raises_one_error_naming_the_field(document, message):
     with pytest.raises(SweepSpecError) as caught:
         SweepSpec.from_mapping(document)
     assert str(caught.value).startswith(message), str(caught.value)
+
+
+def test_the_sensors_section_reaches_the_episode_and_its_key():
+    spec = SweepSpec.from_mapping({"sensors": {"preset": "exact", "state": ["estimate", "truth"],
+                                               "gyro_noise_rad_s": 0.01}})
+    estimate, truth = spec.episodes()
+    case = estimate.plant_case()
+    assert case.state == "estimate" and truth.plant_case().state == "truth"
+    model = case.sensor_model()
+    assert model.name == "exact + gyro_noise_rad_s=0.01" and model.gyro_noise_rad_s == 0.01
+    assert estimate.resolved()["sensors"]["state"] == "estimate"
+    assert estimate.key != truth.key
 
 
 def test_a_bad_override_names_its_field():
