@@ -13,7 +13,14 @@ from numba.core.runtime import _nrt_python, rtsys
 from actions import GoalStatus, HighFiveGoal
 from sim.control_loop import ControlLoop
 from sim.run_recorder import MetricsHook
-from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
+from tests.synthetic_records import (
+    LOADED,
+    expected_height,
+    pose,
+    record,
+    run,
+    started,
+)
 from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
 from wbc.invariant_ekf import InvariantEkf, InvariantEkfConfig
 from wbc.leg_kinematics import LegKinematics
@@ -29,54 +36,14 @@ from wbc.state_estimator import (
     StateEstimator,
 )
 
-LOADED = np.full(4, 200.0)  # the contact schedule of four loaded feet [N]
-LOADED_COUNT = 110.0  # a foot sensor's count under about 40 N
-
-
-def pose(roll_deg: float = 0.0, pitch_deg: float = 0.0, yaw_deg: float = 0.0) -> np.ndarray:
-    q = Go2Description.default().pose("standing")
-    rotation = pin.rpy.rpyToMatrix(*np.radians([roll_deg, pitch_deg, yaw_deg]))
-    q[3:7] = pin.Quaternion(rotation).coeffs()
-    return q
-
-
-def record(q: np.ndarray, *, tick: int, gyro=(0.0, 0.0, 0.0), feet=None) -> SensorRecord:
-    """What a GO2 at rest in configuration ``q`` measures, 1 kHz: noise-free but for the
-    foot counts, which a live sensor's noise changes (108 to 112 on every foot)."""
-    if feet is None:
-        feet = LOADED_COUNT + (tick % 5) - 2
-    x, y, z, w = q[3:7]
-    rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
-    return SensorRecord(
-        stamp_s=tick * 1e-3, tick=tick, imu_quaternion_wxyz=[w, x, y, z],
-        gyroscope_rad_s=gyro, accelerometer_m_s2=rotation.T @ [0.0, 0.0, 9.81],
-        q=q[7:], dq=np.zeros(12), tau_est=np.zeros(12), foot_force=np.full(4, feet, float))
-
-
-def expected_height(q: np.ndarray) -> float:
-    """The base height that puts the feet's sphere centres at one radius above the floor."""
-    model = Go2Description.default().model
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, q)
-    feet = [data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation[2] for leg in LEGS]
-    return float(q[2] + FOOT_RADIUS_M - np.mean(feet))
-
 
 def roll_pitch_yaw_deg(q: np.ndarray) -> np.ndarray:
     x, y, z, w = q[3:7]
     return np.degrees(pin.rpy.matrixToRpy(pin.Quaternion(w, x, y, z).toRotationMatrix()))
 
 
-def started(q: np.ndarray | None = None, **overrides) -> InvariantEkf:
-    estimator = InvariantEkf(**overrides)
-    estimator.reset(record(pose() if q is None else q, tick=0))
-    return estimator
 
 
-def run(estimator: InvariantEkf, q: np.ndarray, ticks: int, first_tick: int = 1, **kwargs):
-    for tick in range(first_tick, first_tick + ticks):
-        estimate = estimator.update(record(q, tick=tick, **kwargs), LOADED)
-    return estimate
 
 
 # ---------------------------------------------------------------------------- statics
@@ -84,7 +51,7 @@ def run(estimator: InvariantEkf, q: np.ndarray, ticks: int, first_tick: int = 1,
 
 def test_a_robot_at_rest_stays_where_its_feet_put_it():
     q = pose()
-    estimator = started(q)
+    estimator = started(InvariantEkf, q)
     estimate = run(estimator, q, 2000)
     assert estimate.trusted and estimate.usable and estimate.faults == ""
     np.testing.assert_allclose(estimate.q[:2], [0.0, 0.0], atol=1e-9)
@@ -115,7 +82,7 @@ def test_a_tilted_start_keeps_its_tilt_and_the_heading_starts_at_zero():
 def test_a_gyroscope_bias_is_learnt_while_roll_and_pitch_stay_level():
     q = pose()
     bias = np.array([0.01, -0.02, 0.005])  # rad/s: 0.6 to 1.1 deg/s, on every axis
-    estimator = started(q)
+    estimator = started(InvariantEkf, q)
     worst = np.zeros(3)
     for tick in range(1, 10_001):
         estimate = estimator.update(record(q, tick=tick, gyro=bias), LOADED)
@@ -132,7 +99,7 @@ def test_a_gyroscope_bias_is_learnt_while_roll_and_pitch_stay_level():
 
 def test_the_imu_quaternion_is_read_at_the_start_only():
     q = pose()
-    estimator = started(q)
+    estimator = started(InvariantEkf, q)
     for tick in range(1, 2002):  # 2 s: longer than quaternion_timeout_s
         broken = record(q, tick=tick)
         # NaN, or a unit quaternion 37 deg away from the truth, in turn (NaN last).
@@ -142,7 +109,7 @@ def test_the_imu_quaternion_is_read_at_the_start_only():
         assert not estimate.flags & QUATERNION_TIMEOUT
     assert estimate.flags & QUATERNION_NON_FINITE
     assert estimate.faults.startswith("IMU quaternion non-finite ([nan, nan, nan, nan])")
-    np.testing.assert_allclose(estimate.q[:7], started(q).estimate.q[:7], atol=1e-9)
+    np.testing.assert_allclose(estimate.q[:7], started(InvariantEkf, q).estimate.q[:7], atol=1e-9)
 
 
 @pytest.mark.parametrize("floor", [False, True], ids=["invariant", "flat floor"])
@@ -174,7 +141,7 @@ def test_a_start_tilted_by_the_imu_quaternion_alone_is_explained_without_moving_
 
 def test_stale_missing_and_non_finite_samples_are_handled_as_the_linear_filter_does():
     q = pose()
-    estimators = [started(q), StateEstimator()]
+    estimators = [started(InvariantEkf, q), StateEstimator()]
     estimators[1].reset(record(q, tick=0))
     script: list[SensorRecord | None] = [record(q, tick=t) for t in range(1, 11)]
     script += [record(q, tick=10)] * 10 + [None]  # 10 stale, then none: 11 ms untrusted
@@ -213,7 +180,7 @@ def test_stale_missing_and_non_finite_samples_are_handled_as_the_linear_filter_d
     (0.0, "FR foot-force sensor stuck at 0: contact from the schedule")])
 def test_a_broken_foot_sensor_is_reported_as_the_linear_filter_does(reading, words):
     q = pose()
-    ours, theirs = started(q), StateEstimator()
+    ours, theirs = started(InvariantEkf, q), StateEstimator()
     theirs.reset(record(q, tick=0))
     for tick in range(1, 61):  # 60 ms of the same reading on a loaded foot
         broken = record(q, tick=tick)
@@ -229,7 +196,7 @@ def test_a_broken_foot_sensor_is_reported_as_the_linear_filter_does(reading, wor
 
 def test_a_foot_the_schedule_lets_go_follows_the_kinematics_and_moves_nothing():
     q = pose()
-    estimator = started(q)
+    estimator = started(InvariantEkf, q)
     start = estimator.estimate.q[:3].copy()
     swing = LOADED.copy()
     swing[1] = 0.0  # FR in the air
@@ -256,7 +223,7 @@ def test_a_foot_the_schedule_lets_go_follows_the_kinematics_and_moves_nothing():
 
 def test_the_covariance_stays_symmetric_and_positive():
     q = pose()
-    estimator = started(q)
+    estimator = started(InvariantEkf, q)
     bounds = LOADED.copy()
     rng = np.random.default_rng(3)
     for tick in range(1, 3001):
@@ -275,7 +242,7 @@ def test_the_tick_allocates_nothing_in_compiled_code():
     """numba wraps each array passed from Python once per call (its unboxing); the tick's
     compiled code allocates nothing beyond that."""
     q = pose()
-    estimator = started(q)
+    estimator = started(InvariantEkf, q)
     records = [record(q, tick=tick) for tick in range(1, 101)]
     estimator.update(records[0], LOADED)
     _nrt_python.memsys_enable_stats()

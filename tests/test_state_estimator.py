@@ -1,16 +1,23 @@
-"""The state estimator on synthetic sensor records: statics, bias, contact fusion, faults, errors."""
+"""The linear state estimator on synthetic sensor records: statics, bias, contacts, faults."""
 
 from __future__ import annotations
 
-import math
 from types import SimpleNamespace
 
 import numpy as np
-import pinocchio as pin
 import pytest
 from numba.core.runtime import _nrt_python, rtsys
 
-from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
+from tests.synthetic_records import (
+    LOADED,
+    LOADED_COUNT,
+    expected_height,
+    pose,
+    record,
+    run,
+    started,
+)
+from wbc.description import LEGS
 from wbc.errors import ConfigurationError, UnknownNameError
 from wbc.sensor_record import SensorRecord
 from wbc.state_estimator import (
@@ -26,57 +33,13 @@ from wbc.state_estimator import (
 )
 from wbc.unitree_sdk import SdkLowState, sensor_record_from_message
 
-LOADED = np.full(4, 200.0)  # the contact schedule of four loaded feet [N]
-LOADED_COUNT = 110.0  # a foot sensor's count under about 40 N
-
-
-def pose(yaw_deg: float = 0.0) -> np.ndarray:
-    q = Go2Description.default().pose("standing")
-    q[3:7] = pin.Quaternion(pin.rpy.rpyToMatrix(0.0, 0.0, math.radians(yaw_deg))).coeffs()
-    return q
-
-
-def record(q: np.ndarray, *, tick: int, period_s: float = 1e-3, gyro=(0.0, 0.0, 0.0),
-           feet=None) -> SensorRecord:
-    """What a GO2 at rest in configuration ``q`` measures: noise-free but for the foot
-    counts, which a live sensor's noise changes (by default 108 to 112 on every foot)."""
-    if feet is None:
-        feet = LOADED_COUNT + (tick % 5) - 2
-    x, y, z, w = q[3:7]
-    rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
-    return SensorRecord(
-        stamp_s=tick * period_s, tick=tick, imu_quaternion_wxyz=[w, x, y, z],
-        gyroscope_rad_s=gyro, accelerometer_m_s2=rotation.T @ [0.0, 0.0, 9.81],
-        q=q[7:], dq=np.zeros(12), tau_est=np.zeros(12), foot_force=np.full(4, feet, float))
-
-
-def expected_height(q: np.ndarray) -> float:
-    """The base height that puts the feet's sphere centres at one radius above the floor."""
-    model = Go2Description.default().model
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, q)
-    feet = [data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation[2] for leg in LEGS]
-    return float(q[2] + FOOT_RADIUS_M - np.mean(feet))
-
-
-def started(q: np.ndarray | None = None, **overrides) -> StateEstimator:
-    estimator = StateEstimator(**overrides)
-    estimator.reset(record(pose() if q is None else q, tick=0))
-    return estimator
-
-
-def run(estimator: StateEstimator, q: np.ndarray, ticks: int, first_tick: int = 1, **kwargs):
-    for tick in range(first_tick, first_tick + ticks):
-        estimate = estimator.update(record(q, tick=tick, **kwargs), LOADED)
-    return estimate
-
 
 # ---------------------------------------------------------------------------- statics
 
 
 def test_a_robot_at_rest_is_estimated_at_rest_where_its_feet_put_it():
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     estimate = run(estimator, q, 2000)
     assert estimate.trusted and estimate.usable and estimate.faults == ""
     np.testing.assert_allclose(estimate.q[:2], [0.0, 0.0], atol=1e-9)
@@ -99,7 +62,7 @@ def test_the_world_starts_with_the_heading_at_zero_unless_told_to_keep_it():
 def test_a_gyroscope_bias_is_learnt_and_leaves_no_tilt():
     q = pose()
     bias = np.array([0.01, -0.02, 0.005])  # rad/s: 0.6 to 1.1 deg/s
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     estimate = run(estimator, q, 60_000, gyro=bias)
     np.testing.assert_allclose(estimator.gyro_bias, bias, atol=2e-4)
     np.testing.assert_allclose(estimate.v[3:6], np.zeros(3), atol=2e-4)
@@ -113,7 +76,7 @@ def test_a_gyroscope_bias_is_learnt_and_leaves_no_tilt():
 
 def test_a_foot_the_sensor_calls_unloaded_or_the_schedule_lifts_has_no_weight():
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     unloaded = record(q, tick=1)
     unloaded.foot_force[1] = 20.0  # FR: below the 40-count release threshold
     estimate = estimator.update(unloaded, LOADED)
@@ -134,7 +97,7 @@ def test_a_foot_the_sensor_calls_unloaded_or_the_schedule_lifts_has_no_weight():
 
 def test_schedule_only_mode_ignores_the_foot_sensors():
     q = pose()
-    estimator = started(q, use_foot_force=False)
+    estimator = started(StateEstimator, q, use_foot_force=False)
     silent = record(q, tick=1, feet=0.0)  # no foot sensors: zeros
     np.testing.assert_array_equal(estimator.update(silent, LOADED).contact, np.ones(4))
     assert estimator.estimate.faults == ""
@@ -145,7 +108,7 @@ def test_schedule_only_mode_ignores_the_foot_sensors():
 
 def test_stale_and_missing_samples_are_untrusted_and_unusable_after_the_timeout():
     q = pose()
-    estimator = started(q)  # trust_timeout_s 0.01: ten 1 ms ticks
+    estimator = started(StateEstimator, q)  # trust_timeout_s 0.01: ten 1 ms ticks
     run(estimator, q, 10)
     repeated = record(q, tick=10)
     for k in range(10):
@@ -179,7 +142,7 @@ def test_time_predicted_without_samples_is_not_predicted_again():
 
 def test_a_bad_quaternion_is_reported_and_the_gyroscope_carries_the_orientation():
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     run(estimator, q, 10)
     bad = record(q, tick=11)
     bad.imu_quaternion_wxyz[:] = np.nan
@@ -198,7 +161,7 @@ def test_a_bad_quaternion_is_reported_and_the_gyroscope_carries_the_orientation(
 
 def test_non_finite_joints_make_the_sample_untrusted_and_keep_the_last_good_joints():
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     bad = record(q, tick=1)
     bad.q[4] = np.nan
     estimate = estimator.update(bad, LOADED)
@@ -213,7 +176,7 @@ def test_non_finite_joints_make_the_sample_untrusted_and_keep_the_last_good_join
     (0.0, "FR foot-force sensor stuck at 0: contact from the schedule")])
 def test_a_broken_foot_sensor_is_distrusted_then_trusted_again(reading, words):
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     rng = np.random.default_rng(1)
     tick = 0
     for _ in range(60):  # 60 ms of the same reading on a loaded foot
@@ -234,7 +197,7 @@ def test_a_broken_foot_sensor_is_distrusted_then_trusted_again(reading, words):
 
 def test_a_foot_in_the_air_may_read_a_steady_value():
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     swing = LOADED.copy()
     swing[1] = 0.0
     for tick in range(1, 200):
@@ -248,7 +211,7 @@ def test_the_tick_allocates_nothing_in_compiled_code():
     """numba wraps each array passed from Python once per call (its unboxing); the tick's
     compiled code allocates nothing beyond that."""
     q = pose()
-    estimator = started(q)
+    estimator = started(StateEstimator, q)
     records = [record(q, tick=tick) for tick in range(1, 101)]
     estimator.update(records[0], LOADED)
     _nrt_python.memsys_enable_stats()
