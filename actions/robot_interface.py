@@ -27,7 +27,6 @@ from wbc.motor_command import MotorCommand
 from wbc.sensor_record import SensorRecord
 from wbc.validation import as_vector, check_name
 
-
 #: Where a control loop's state comes from: estimated from the robot's sensors (the default,
 #: as on a real GO2), or the exact state of a simulated robot.
 STATE_SOURCES = ("estimate", "truth")
@@ -70,6 +69,41 @@ class TrueState(Protocol):
 
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q (19,), v (18,))``: Pinocchio-convention base, joints in the robot's order."""
+
+
+class RobotWrapper:
+    """A robot that passes everything on to the robot it wraps, in the same orders: the base
+    of robots that change one thing (a command delay, sensor faults)."""
+
+    def __init__(self, robot: RobotInterface):
+        self.robot = robot
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The robot's joint order."""
+        return self.robot.joint_names
+
+    @property
+    def leg_names(self) -> tuple[str, ...]:
+        """The robot's leg order."""
+        return self.robot.leg_names
+
+    @property
+    def time_s(self) -> float:
+        """The robot's clock [s]."""
+        return self.robot.time_s
+
+    def read_sensors(self) -> SensorRecord | None:
+        """The robot's sensor record."""
+        return self.robot.read_sensors()
+
+    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's exact state (simulators only)."""
+        return self.robot.read_state()  # type: ignore[attr-defined]
+
+    def write_command(self, command: MotorCommand) -> None:
+        """Passed on."""
+        self.robot.write_command(command)
 
 
 class MappedRobot:

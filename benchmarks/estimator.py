@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -36,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from actions.messages import HighFiveGoal
-from benchmarks.loop_timing import machine
+from benchmarks.loop_timing import _json_safe, machine
 from benchmarks.robustness import (
     SETTLE_S,
     PlantCase,
@@ -196,16 +195,6 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"  {c['estimator']:<6} ({c['what']}): median {c['median_us']:.1f} us, "
                      f"p99 {c['p99_us']:.1f} us over {c['updates']} updates")
     return "\n".join(lines)
-
-
-def _json_safe(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -31,10 +31,10 @@ from actions.messages import FollowJointTrajectoryGoal, HighFiveGoal, SitGoal, S
 from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
 from actions.robot_interface import STATE_SOURCES
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
-from sim.sensor_faults import FAULT_KINDS, SensorFault
-from sim.sensors import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from sim.run_recorder import RAISED_LEG, MetricsHook, TickRecorder, write_plot
 from sim.scene_overlay import DEFAULT_OVERLAYS, SceneOverlay, parse_overlays
+from sim.sensor_faults import FAULT_KINDS, SensorFault
+from sim.sensors import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from sim.trajectory_file import load_trajectory_goal
 from sim.video_recorder import VideoRecorder, choose_offscreen_gl
 from sim.viewer import Pacer, ViewerHook, window_problem

@@ -1,4 +1,4 @@
-"""The control loop (1 kHz by default): the robot's sensors, the state estimator, the actions, the controller."""
+"""The control loop (1 kHz by default): sensors, state estimator, actions, controller, drivers."""
 
 from __future__ import annotations
 
@@ -21,9 +21,9 @@ from wbc.balance_controller import BalanceController
 from wbc.control_output import ControlOutput
 from wbc.description import JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
+from wbc.estimators import make_estimator
 from wbc.motor_command import within_effort_limits
 from wbc.sensor_record import SensorRecord
-from wbc.estimators import make_estimator
 from wbc.state_estimator import EstimatorBase
 from wbc.validation import check_name
 from wbc.whole_body_controller import WholeBodyController
@@ -43,11 +43,12 @@ class ControlLoop:
 
     The controller sees what a GO2 measures: each tick the robot's sensor record goes
     through a state estimator (by default :class:`wbc.InvariantEkf`: IMU, joint encoders,
-    foot contact, and the controller's contact schedule) to the controller's ``(q, v)``. When the estimator has had
-    no trustworthy sample for longer than its ``trust_timeout_s``, the loop sends the
-    controller's safe command with the reason instead (a running goal then ends ABORTED),
-    and resumes when samples return. ``state="truth"`` hands the controller the simulator's
-    exact state instead (a simulator only; for comparisons).
+    foot contact, and the controller's contact schedule) to the controller's ``(q, v)``.
+    When the estimator has had no trustworthy sample for longer than its
+    ``trust_timeout_s``, the loop sends the controller's safe command with the reason
+    instead (a running goal then ends ABORTED), and resumes when samples return.
+    ``state="truth"`` hands the controller the simulator's exact state instead (a simulator
+    only; for comparisons).
 
     Example:
         >>> loop = ControlLoop.simulated()
@@ -173,10 +174,18 @@ class ControlLoop:
 
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
         """The ``(q, v)`` the controller gets this tick (new arrays): the estimate from this
-        period's sensor sample and the controller's contact schedule, or the exact state."""
+        period's sensor sample and the controller's contact schedule, or the exact state.
+
+        Also what the behaviours see (``context``), so that a loop driven by hand (read,
+        ``command``, ``robot.write_command``) keeps them and the loop's hooks up to date.
+        """
+        now = self.robot.time_s
         if self.estimator is None:
-            return self.robot.read_state()
-        return self.estimate_state(self.robot.read_sensors())
+            q, v = self.robot.read_state()
+        else:
+            q, v = self.estimate_state(self.robot.read_sensors())
+        self.context.observe(now, q, v)
+        return q, v
 
     def estimate_state(self, record: SensorRecord | None) -> tuple[np.ndarray, np.ndarray]:
         """The estimator's tick on ``record`` (``None``: no sample this period) and the
@@ -202,10 +211,8 @@ class ControlLoop:
 
     def spin_once(self) -> ControlOutput:
         """One control period."""
-        now = self.robot.time_s
         q, v = self.read_state()
-        self.context.observe(now, q, v)
-        self.runner.tick(now)
+        self.runner.tick(self.context.now_s)
         out = self.guard(self.command(q, v), v)
         self.context.record_output(out)
         self.last_output = out

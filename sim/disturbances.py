@@ -13,13 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from actions.robot_interface import RobotInterface
+from actions.robot_interface import RobotInterface, RobotWrapper
 from wbc.errors import ConfigurationError
 from wbc.motor_command import MotorCommand
-from wbc.sensor_record import SensorRecord
 
 
-class DelayedRobot:
+class DelayedRobot(RobotWrapper):
     """A robot whose commands arrive ``delay_ticks`` control periods late.
 
     Wraps a :class:`~actions.robot_interface.RobotInterface` (same orders; sensors and the
@@ -38,32 +37,9 @@ class DelayedRobot:
                 0 <= delay_ticks <= 100):
             raise ConfigurationError(
                 f"delay_ticks: expected a whole number in [0, 100], received {delay_ticks!r}")
-        self.robot = robot
+        super().__init__(robot)
         self.delay_ticks = delay_ticks
         self._queue: deque[MotorCommand] = deque()
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The robot's joint order."""
-        return self.robot.joint_names
-
-    @property
-    def leg_names(self) -> tuple[str, ...]:
-        """The robot's leg order."""
-        return self.robot.leg_names
-
-    @property
-    def time_s(self) -> float:
-        """The robot's clock [s]."""
-        return self.robot.time_s
-
-    def read_sensors(self) -> SensorRecord | None:
-        """The robot's sensor record."""
-        return self.robot.read_sensors()
-
-    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """The robot's exact state (simulators)."""
-        return self.robot.read_state()
 
     def write_command(self, command: MotorCommand) -> None:
         """Queue a command; the one from ``delay_ticks`` periods ago is applied."""

@@ -178,7 +178,8 @@ class EstimateErrors:
             "roll_max_deg": math.degrees(st[_ROLL]), "pitch_max_deg": math.degrees(st[_PITCH]),
             "horizontal_drift_mm": 1e3 * st[_DRIFT],
             "horizontal_drift_max_mm": 1e3 * st[_DRIFT_MAX],
-            "yaw_drift_deg": math.degrees(st[_YAW]), "yaw_drift_max_deg": math.degrees(st[_YAW_MAX]),
+            "yaw_drift_deg": math.degrees(st[_YAW]),
+            "yaw_drift_max_deg": math.degrees(st[_YAW_MAX]),
         }
 
 

@@ -1,4 +1,4 @@
-"""A MuJoCo GO2 plant behind the :class:`actions.RobotInterface`: its sensors, its actuators' order."""
+"""A MuJoCo GO2 behind the :class:`actions.RobotInterface`: its sensors, its actuators' order."""
 
 from __future__ import annotations
 

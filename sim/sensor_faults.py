@@ -15,10 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from actions.robot_interface import RobotInterface
+from actions.robot_interface import RobotInterface, RobotWrapper
 from wbc.description import JOINT_NAMES, LEGS
 from wbc.errors import ConfigurationError
-from wbc.motor_command import MotorCommand
 from wbc.sensor_record import SensorRecord
 from wbc.validation import as_float, check_name
 
@@ -81,7 +80,7 @@ class SensorFault:
         return f"{what} from {self.at_s:g} s for {self.duration_s * 1e3:g} ms"
 
 
-class FaultyRobot:
+class FaultyRobot(RobotWrapper):
     """A robot whose sensor records are corrupted by scheduled faults (see the module).
 
     Args:
@@ -93,7 +92,7 @@ class FaultyRobot:
 
     def __init__(self, robot: RobotInterface, faults: Sequence[SensorFault], *,
                  foot_full_scale: float = 1000.0):
-        self.robot = robot
+        super().__init__(robot)
         self.faults = tuple(faults)
         for fault in self.faults:
             if not isinstance(fault, SensorFault):
@@ -105,21 +104,6 @@ class FaultyRobot:
         self._delivered = SensorRecord.zeros()
         self._corrupted = SensorRecord.zeros()
         self._has_delivered = False
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The robot's joint order."""
-        return self.robot.joint_names
-
-    @property
-    def leg_names(self) -> tuple[str, ...]:
-        """The robot's leg order."""
-        return self.robot.leg_names
-
-    @property
-    def time_s(self) -> float:
-        """The robot's clock [s]."""
-        return self.robot.time_s
 
     def read_sensors(self) -> SensorRecord | None:
         """The robot's record, corrupted by the faults active now."""
@@ -158,11 +142,3 @@ class FaultyRobot:
             self._delivered.copy_from(record)
             self._has_delivered = True
         return record
-
-    def read_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """The robot's exact state, untouched (simulators)."""
-        return self.robot.read_state()
-
-    def write_command(self, command: MotorCommand) -> None:
-        """Passed on untouched."""
-        self.robot.write_command(command)

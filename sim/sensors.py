@@ -216,7 +216,8 @@ _VS = _F8[:]
             cache=True)
 def _sample(qpos, qvel, joint_qpos, joint_dof, leg_rows, actuator_force, touch, dt,
             imu_offset, site_velocity, has_previous, noise, params, gyro_bias, accel_bias,
-            attitude, integral, quaternion, gyroscope, accelerometer, q, dq, tau, feet):  # pragma: no cover
+            attitude, integral, quaternion, gyroscope, accelerometer, q, dq, tau,
+            feet):  # pragma: no cover - compiled
     """One sensor sample from MuJoCo's state (see the module docstring).
 
     Args:

@@ -45,11 +45,11 @@ def run_lift(leg: str = "FR", height_m: float = 0.40, hold_s: float = 2.0,
     wall = time.perf_counter()
     while lift.phase is not LiftPhase.DONE and loop.sim.time_s < t_start + 30.0:
         now = loop.sim.time_s
-        if interrupt_at_s is not None and interrupted_in is None and now - t_start >= interrupt_at_s:
+        if (interrupt_at_s is not None and interrupted_in is None
+                and now - t_start >= interrupt_at_s):
             interrupted_in = lift.phase
             lift.request_lower(now)
         q, v = loop.read_state()
-        loop.context.observe(now, q, v)
         phase = lift.update(now)
         if not phases or phases[-1] != phase:
             phases.append(phase)

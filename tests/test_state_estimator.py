@@ -222,7 +222,8 @@ def test_the_tick_allocates_nothing_in_compiled_code():
         allocated = rtsys.get_allocation_stats().alloc - before
     finally:
         _nrt_python.memsys_disable_stats()
-    arrays = sum(isinstance(a, np.ndarray) for a in estimator._tick_arrays)
+    # The estimator's own arrays, and the sample's six.
+    arrays = sum(isinstance(a, np.ndarray) for a in estimator._tick_arrays) + 6
     assert allocated == 99 * arrays
 
 
@@ -288,6 +289,15 @@ def test_bad_input_gets_one_clear_error():
     with pytest.raises(ConfigurationError, match=r"^normal_force_bounds: expected 4 numbers"):
         estimator.update(record(pose(), tick=1), np.zeros(3))
     assert estimator.update(record(pose(), tick=1), LOADED).trusted
+    with pytest.raises(ConfigurationError, match=r"^record: expected a SensorRecord or None, "
+                                                 r"received dict"):
+        estimator.update({"q": pose()[7:]}, LOADED)  # type: ignore[arg-type]
+    replaced = record(pose(), tick=2)
+    replaced.q = [0.0] * 11  # after construction: checked again, the field named
+    with pytest.raises(ConfigurationError, match=r"^q: expected an array of shape \(12,\)"):
+        estimator.update(replaced, LOADED)
+    replaced.q = list(pose()[7:])
+    assert estimator.update(replaced, LOADED).trusted
     with pytest.raises(UnknownNameError, match=r"^unknown estimator parameter 'nope'; valid "
                                                r"estimator parameters: quaternion_tolerance, "):
         EstimatorConfig(nope=1)  # type: ignore[call-arg]

@@ -738,9 +738,9 @@ class EstimatorBase:
         self._joint_q = np.zeros(12)
         self._joint_dq = np.zeros(12)
         self._work = np.zeros(self.work_size)
+        #: The last sample that came (the fault text quotes its readings).
         self._input = SensorRecord.zeros()
         self._schedule = np.zeros(4)
-        self._fresh = True
         self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
@@ -825,15 +825,24 @@ class EstimatorBase:
                 raise ConfigurationError(
                     f"normal_force_bounds: expected 4 numbers (FL, FR, RL, RR) [N], received "
                     f"{normal_force_bounds!r}") from None
-        if record is None:
-            self._fresh = False
+        if record is None:  # the kernel reads nothing of a sample that did not come
+            fresh, record = False, self._input
         else:
-            self._fresh = True
-            if record is not self._input:
-                self._input.copy_from(record)
+            fresh, self._input = True, record
         if self._tick is None:
             self._tick = self._bind()
-        flags = int(self._tick())
+        try:
+            flags = int(self._tick(fresh, record))
+        except (TypeError, AttributeError):
+            if isinstance(record, SensorRecord):  # its arrays were replaced after construction
+                record = SensorRecord(**{f.name: getattr(record, f.name)
+                                         for f in fields(SensorRecord)})
+            else:
+                raise ConfigurationError(
+                    f"record: expected a SensorRecord or None, received "
+                    f"{type(record).__name__}") from None
+            self._input = record
+            flags = int(self._tick(fresh, record))
         estimate = self.estimate
         estimate.flags = flags
         estimate.trusted = not flags & UNTRUSTED
@@ -846,23 +855,27 @@ class EstimatorBase:
         return estimate
 
     def _bind(self) -> Any:
-        """The kernel's compiled overload with every array bound (the record's are the
-        estimator's own input buffers); its scalars are passed per call."""
-        record, legs, estimate = self._input, self.legs, self.estimate
+        """The kernel's compiled overload with the estimator's own arrays bound; the
+        sample's are passed per call (read where they are: no copy)."""
+        legs, estimate = self.legs, self.estimate
         arrays = (
-            record.imu_quaternion_wxyz, record.gyroscope_rad_s, record.accelerometer_m_s2,
-            record.q, record.dq, record.foot_force, self._schedule, self.control_period_s,
-            self._params, legs.imu_offset, legs.rotations, legs.translations, legs.axes,
-            legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
-            legs.foot_angular_jacobian, self._clock, *self._filter_arrays(),
-            self._foot_contact, self._foot_same_s, self._foot_good_s, self._foot_reason,
-            self._foot_last, self._joint_q, self._joint_dq, estimate.q, estimate.v,
-            estimate.contact, self._work)
-        compiled = bind_compiled(self.kernel, True, 0.0, 0.0, *arrays).func
+            self._schedule, self.control_period_s, self._params, legs.imu_offset,
+            legs.rotations, legs.translations, legs.axes, legs.foot_offsets,
+            legs.foot_position, legs.foot_jacobian, legs.foot_angular_jacobian, self._clock,
+            *self._filter_arrays(), self._foot_contact, self._foot_same_s, self._foot_good_s,
+            self._foot_reason, self._foot_last, self._joint_q, self._joint_dq, estimate.q,
+            estimate.v, estimate.contact, self._work)
+        sample = self._input
+        compiled = bind_compiled(
+            self.kernel, True, 0.0, 0.0, sample.imu_quaternion_wxyz, sample.gyroscope_rad_s,
+            sample.accelerometer_m_s2, sample.q, sample.dq, sample.foot_force, *arrays).func
         self._tick_arrays = arrays
 
-        def tick() -> int:
-            return compiled(self._fresh, float(record.tick), record.stamp_s, *arrays)
+        def tick(fresh: bool, record: SensorRecord) -> int:
+            return compiled(fresh, float(record.tick), record.stamp_s,
+                            record.imu_quaternion_wxyz, record.gyroscope_rad_s,
+                            record.accelerometer_m_s2, record.q, record.dq, record.foot_force,
+                            *arrays)
 
         return tick
 

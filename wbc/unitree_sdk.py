@@ -340,11 +340,7 @@ class SdkLowState:
                 foot_force=low_state.foot_force, tick=int(getattr(low_state, "tick", 0)),
             )
         except (AttributeError, IndexError, TypeError) as err:
-            raise ConfigurationError(
-                f"low_state: expected a LowState_ (imu_state.quaternion, .gyroscope, "
-                f".accelerometer; motor_state[0..{SDK_LEG_MOTORS - 1}].q, .dq, .tau_est; "
-                f"foot_force), received {type(low_state).__name__}: {err}"
-            ) from err
+            raise _not_a_low_state(low_state, err) from err
 
     def to_pinocchio(self, base_position: np.ndarray | None = None,
                      base_linear_velocity_world: np.ndarray | None = None,
@@ -491,8 +487,11 @@ def sensor_record_from_message(low_state: Any, *, stamp_s: float | None = None) 
                        [m.tau_est for m in motors], low_state.foot_force,
                        int(getattr(low_state, "tick", 0)), stamp_s)
     except (AttributeError, IndexError, TypeError) as err:
-        raise ConfigurationError(
-            f"low_state: expected a LowState_ (imu_state.quaternion, .gyroscope, "
-            f".accelerometer; motor_state[0..{SDK_LEG_MOTORS - 1}].q, .dq, .tau_est; "
-            f"foot_force), received {type(low_state).__name__}: {err}"
-        ) from err
+        raise _not_a_low_state(low_state, err) from err
+
+
+def _not_a_low_state(low_state: Any, err: Exception) -> ConfigurationError:
+    return ConfigurationError(
+        f"low_state: expected a LowState_ (imu_state.quaternion, .gyroscope, .accelerometer; "
+        f"motor_state[0..{SDK_LEG_MOTORS - 1}].q, .dq, .tau_est; foot_force), received "
+        f"{type(low_state).__name__}: {err}")
