@@ -261,6 +261,16 @@ def _sensor_param(text: str) -> tuple[str, Any]:
     return name, value
 
 
+def _estimator_param(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` of an estimator parameter; checked once the estimator is known."""
+    name, sep, value_text = text.partition("=")
+    if not sep:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, received {text!r}")
+    words = {"true": True, "yes": True, "false": False, "no": False}
+    value = words.get(value_text.strip().lower(), _number_or_text(value_text))
+    return name, value
+
+
 def _sensor_fault(text: str) -> SensorFault:
     """``KIND,AT_S,DURATION_S[,NAME]``: a sensor fault on the simulated clock."""
     parts = [p.strip() for p in text.split(",")]
@@ -320,6 +330,12 @@ def _state_options(group: Any) -> None:
                        help="the state estimator: " + "; ".join(
                            f"'{name}': {what}" for name, what in ESTIMATORS.items())
                        + f" (default: {DEFAULT_ESTIMATOR}; see the README's State estimation)")
+    group.add_argument("--estimator-param", type=_estimator_param, action="append", default=[],
+                       metavar="NAME=VALUE",
+                       help="change one estimator parameter, repeatable: use_foot_force=false "
+                            "(contact from the schedule alone: a robot without foot sensors), "
+                            "trust_timeout_s, foot_force_on, foot_force_off, ... (default: the "
+                            "estimator's values)")
     group.add_argument("--sensors", choices=tuple(SENSOR_PRESETS), default=DEFAULT_SENSORS,
                        help=f"what the simulated GO2 measures (default: {DEFAULT_SENSORS}: its "
                             "IMU, encoders and foot sensors with noise and biases; 'exact': "
@@ -373,6 +389,12 @@ def _resolve_plant(args: argparse.Namespace) -> None:
     except WbcError as err:
         args.parser.error(f"--control-rate: {args.control_rate:g} Hz with --physics-dt "
                           f"{args.physics_dt:g} s: {err}")
+    if hasattr(args, "estimator_param"):
+        try:
+            make_estimator(args.estimator, control_period_s=args.control_period_s,
+                           **dict(args.estimator_param))
+        except WbcError as err:
+            args.parser.error(f"--estimator-param: {err}")
     if hasattr(args, "command_delay"):
         ticks = round(args.command_delay / args.control_period_s)
         if abs(ticks * args.control_period_s - args.command_delay) > 1e-9:
@@ -415,7 +437,8 @@ def state_line(args: argparse.Namespace) -> str:
         return ("state: the simulator's exact state (--state truth; a GO2 measures no base "
                 f"position or velocity); {args.sensor_model.describe()} unused")
     faults = "".join(f"; fault: {fault.describe()}" for fault in args.sensor_fault)
-    return (f"state: estimated ({args.estimator}, {ESTIMATORS[args.estimator]}) from "
+    changed = "".join(f", {name}={value}" for name, value in args.estimator_param)
+    return (f"state: estimated ({args.estimator}, {ESTIMATORS[args.estimator]}{changed}) from "
             f"{args.sensor_model.describe()}, seed {args.sensor_seed}{faults}")
 
 
@@ -428,7 +451,8 @@ def simulated_loop(args: argparse.Namespace, pose: str = "standing") -> "Control
         pose=pose, plant=args.plant_model, control_period_s=args.control_period_s,
         physics_timestep_s=args.physics_dt, sensors=args.sensor_model,
         sensor_seed=args.sensor_seed, state=args.state,
-        estimator=(make_estimator(args.estimator, control_period_s=args.control_period_s)
+        estimator=(make_estimator(args.estimator, control_period_s=args.control_period_s,
+                                  **dict(args.estimator_param))
                    if args.state == "estimate" else None),
         command_delay_ticks=args.command_delay_ticks, sensor_faults=args.sensor_fault)
 
@@ -994,6 +1018,7 @@ class GoalRun:
             "state": {
                 "source": self.args.state,
                 "estimator": self.args.estimator if self.args.state == "estimate" else None,
+                "estimator_params": dict(self.args.estimator_param),
                 "sensors": self.args.sensor_model.as_dict(),
                 "sensor_seed": self.args.sensor_seed,
                 "estimator_config": (None if self.loop.estimator is None

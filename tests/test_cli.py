@@ -516,6 +516,12 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
       "'dropout,1'")),
     (["--sensor-fault", "foot_zero,1,0.1,XL"],
      "--sensor-fault: unknown leg 'XL'; valid legs: FL, FR, RL, RR"),
+    (["--estimator", "ukf"], "--estimator: invalid choice: 'ukf' (choose from 'inekf', 'kf')"),
+    (["--estimator-param", "trust=1"],
+     "--estimator-param: unknown estimator parameter(s) ['trust']; valid parameters: "
+     "quaternion_tolerance, "),
+    (["--estimator-param", "trust_timeout_s=-1"],
+     "--estimator-param: trust_timeout_s: expected a value in [0, 10], received -1"),
     (["--command-delay", "0.0025"],
      ("--command-delay: expected a whole number of control periods of 0.001 s (e.g. 0.001, "
       "0.009), received 0.0025")),
@@ -523,6 +529,9 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
 def test_bad_plant_and_rate_options_are_one_line_usage_errors(argv, message, capsys):
     prog = "go2-wbc high-five"
     line = usage_error(["high-five", *argv], capsys)
+    if message.endswith(", "):  # a list of valid names, too long to spell out here
+        assert line.startswith(f"{prog}: error: {message}")
+        return
     assert line == f"{prog}: error: {message} (see '{prog} --help')"
 
 
@@ -538,9 +547,12 @@ def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
     report = tmp_path / "fault.json"
     code, out = run(["high-five", "--hold", "1", "--sensor-fault", "dropout,3.3,0.02",
                      "--sensor-param", "gyro_noise_rad_s=0.01", "--command-delay", "0.002",
+                     "--estimator", "kf", "--estimator-param", "use_foot_force=false",
                      "--report", str(report)])
     assert code == EXIT_NOT_SUCCEEDED, out
     lines = out.splitlines()
+    assert lines[0].startswith("state: estimated (kf, linear Kalman filter: the IMU's "
+                               "orientation and leg kinematics, use_foot_force=False) from ")
     assert lines[0].endswith("seed 0; fault: no sample arrives from 3.3 s for 20 ms")
     assert "gyro 0.01 rad/s" in lines[0]
     assert lines[1].endswith("; commands applied 2 ms late")
@@ -550,6 +562,8 @@ def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
     assert state["sensor_faults"] == [{"kind": "dropout", "at_s": 3.3, "duration_s": 0.02,
                                        "name": ""}]
     assert state["command_delay_s"] == 0.002 and state["sensors"]["gyro_noise_rad_s"] == 0.01
+    assert state["estimator"] == "kf" and state["estimator_params"] == {"use_foot_force": False}
+    assert state["estimator_config"]["use_foot_force"] is False
 
 
 def test_stand_pd_checks_the_plant_and_rate_options_too(capsys):
