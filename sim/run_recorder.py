@@ -12,6 +12,7 @@ import numpy as np
 from actions.high_five_behaviour import PHASE_NAMES
 from wbc.description import JOINT_NAMES, LEGS
 from wbc.leg_lift import LiftPhase
+from wbc.sensor_log import log_row
 from wbc.support_polygon import shrunk_signed_distance
 
 if TYPE_CHECKING:
@@ -33,7 +34,9 @@ class TickRecorder:
     ``q``, ``v`` are the controller's state (the estimate, unless ``--state truth``);
     ``q_true``, ``v_true`` the simulator's exact state at the same instant;
     ``estimate_contact`` the estimator's contact weight of each foot and ``estimate_flags``
-    its fault flags (``wbc.state_estimator``'s constants; 0 with ``--state truth``).
+    its fault flags (``wbc.state_estimator``'s constants; 0 with ``--state truth``); when
+    estimating, every sensor record the estimator read and its contact schedule
+    (:class:`wbc.sensor_log.SensorLog` reads them back).
     """
 
     def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG,
@@ -74,6 +77,10 @@ class TickRecorder:
         row["estimate_contact"].append(np.ones(len(LEGS)) if estimate is None
                                        else np.array(estimate.contact))
         row["estimate_flags"].append(0 if estimate is None else estimate.flags)
+        if loop.estimator is not None:  # what the estimator read: a sensor log (wbc.sensor_log)
+            for name, value in log_row(loop.estimator.last_sample,
+                                       loop.estimator.last_schedule).items():
+                row.setdefault(name, []).append(value)
         row["tau"].append(np.array(out.tau))
         row["foot_target"].append(np.full(3, np.nan) if target is None else np.array(target))
         row["foot_position"].append(feet[self._row])
@@ -162,7 +169,7 @@ def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None
     ax.plot(t, np.linalg.norm(error_v, axis=1) * 1e2, label="|base velocity| [cm/s]")
     ax.axhline(0.0, color="0.5", lw=0.6)
     ax.set_ylabel("estimate - truth")
-    ax.legend(loc="upper right", fontsize=8)
+    ax.legend(loc="center right", fontsize=8)
     ax = axes[4]
     ax.plot(t, arrays["tick_us"], lw=0.5)
     ax.axhline(1e3, color="tab:red", lw=0.8, ls=":", label="1 kHz period")

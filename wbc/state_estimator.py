@@ -741,6 +741,7 @@ class EstimatorBase:
         #: The last sample that came (the fault text quotes its readings).
         self._input = SensorRecord.zeros()
         self._schedule = np.zeros(4)
+        self._fresh = False  # the last tick had a sample
         self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
@@ -829,6 +830,7 @@ class EstimatorBase:
             fresh, record = False, self._input
         else:
             fresh, self._input = True, record
+        self._fresh = fresh
         if self._tick is None:
             self._tick = self._bind()
         try:
@@ -880,6 +882,16 @@ class EstimatorBase:
         return tick
 
     # -- reporting -----------------------------------------------------------------------
+
+    @property
+    def last_sample(self) -> SensorRecord | None:
+        """The last tick's sample (``None`` if none came; the caller's record, not a copy)."""
+        return self._input if self._fresh else None
+
+    @property
+    def last_schedule(self) -> np.ndarray:
+        """The contact schedule [N] the last tick was given (a copy)."""
+        return self._schedule.copy()
 
     def describe(self, flags: int | None = None) -> str:
         """What the estimator distrusts this tick, in words ('' when nothing), with the
