@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
-from numba.core.runtime import _nrt_python, rtsys
 
 from actions import GoalStatus, HighFiveGoal
 from sim.control_loop import ControlLoop
@@ -238,24 +237,6 @@ def test_the_covariance_stays_symmetric_and_positive():
     assert np.all(np.isfinite(estimator.estimate.q))
 
 
-def test_the_tick_allocates_nothing_in_compiled_code():
-    """numba wraps each array passed from Python once per call (its unboxing); the tick's
-    compiled code allocates nothing beyond that."""
-    q = pose()
-    estimator = started(InvariantEkf, q)
-    records = [record(q, tick=tick) for tick in range(1, 101)]
-    estimator.update(records[0], LOADED)
-    _nrt_python.memsys_enable_stats()
-    try:
-        before = rtsys.get_allocation_stats().alloc
-        for sample in records[1:]:
-            estimator.update(sample, LOADED)
-        allocated = rtsys.get_allocation_stats().alloc - before
-    finally:
-        _nrt_python.memsys_disable_stats()
-    # The estimator's own arrays, and the sample's six.
-    arrays = sum(isinstance(a, np.ndarray) for a in estimator._tick_arrays) + 6
-    assert allocated == 99 * arrays
 
 
 # ---------------------------------------------------------------------------- bad input

@@ -19,6 +19,7 @@ from tests.synthetic_records import (
 )
 from wbc.description import LEGS
 from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.invariant_ekf import InvariantEkf
 from wbc.sensor_record import SensorRecord
 from wbc.state_estimator import (
     FOOT_SENSOR,
@@ -32,7 +33,6 @@ from wbc.state_estimator import (
     check_sample,
 )
 from wbc.unitree_sdk import SdkLowState, sensor_record_from_message
-
 
 # ---------------------------------------------------------------------------- statics
 
@@ -207,11 +207,12 @@ def test_a_foot_in_the_air_may_read_a_steady_value():
     assert not estimate.flags & FOOT_SENSOR
 
 
-def test_the_tick_allocates_nothing_in_compiled_code():
+@pytest.mark.parametrize("kind", [StateEstimator, InvariantEkf], ids=["kf", "inekf"])
+def test_the_tick_allocates_nothing_in_compiled_code(kind):
     """numba wraps each array passed from Python once per call (its unboxing); the tick's
     compiled code allocates nothing beyond that."""
     q = pose()
-    estimator = started(StateEstimator, q)
+    estimator = started(kind, q)
     records = [record(q, tick=tick) for tick in range(1, 101)]
     estimator.update(records[0], LOADED)
     _nrt_python.memsys_enable_stats()

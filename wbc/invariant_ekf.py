@@ -59,8 +59,8 @@ from wbc.state_estimator import (
     SensorTrustConfig,
     account_trust,
     check_sample,
-    contact_weights,
     foot_motion,
+    legs_and_contacts,
     write_outputs,
 )
 from wbc.validation import known_fields_only
@@ -140,10 +140,8 @@ class InvariantEkfConfig(SensorTrustConfig):
         "gyroscope_noise", "accelerometer_noise", "gyro_bias_noise", "accel_bias_noise",
         "contact_noise", "kinematics_noise_rad", "foot_position_noise_m",
         "foot_velocity_noise_m_s", "foot_height_noise_m", "swing_noise_scale",
-        "min_contact_weight", "full_trust_force_n", "use_foot_force", "foot_force_on",
-        "foot_force_off", "foot_force_full_scale", "foot_sensor_stuck_s",
-        "foot_sensor_recover_s", "foot_radius_m", "quaternion_tolerance",
-        "initial_tilt_rad", "initial_gyro_bias_rad_s", "initial_accel_bias_m_s2")
+        "min_contact_weight", "foot_radius_m", "quaternion_tolerance", "initial_tilt_rad",
+        "initial_gyro_bias_rad_s", "initial_accel_bias_m_s2")
 
     gyroscope_noise: float = 0.003
     accelerometer_noise: float = 0.1
@@ -392,11 +390,9 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     ``x`` (:data:`_X_SIZE`) is the mean, ``P`` (27, 27) the right-invariant error's
     covariance; ``work`` (:data:`_WORK_SIZE`) is scratch space: the tick allocates nothing.
     """
-    (sigma_k, sigma_pos, sigma_vel, sigma_h, swing_scale, min_weight, full_force, use_force,
-     force_on, force_off, force_full, stuck_s, recover_s, radius, quat_tol) = (
+    (sigma_k, sigma_pos, sigma_vel, sigma_h, swing_scale, min_weight, radius, quat_tol) = (
         params[5], params[6], params[7], params[8], params[9], params[10], params[11],
-        params[12], params[13], params[14], params[15], params[16], params[17], params[18],
-        params[19])
+        params[12])
     flags, dt, new, _quaternion_ok, gyro_ok, accel_ok, joints_ok = check_sample(
         fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock, dt_nominal,
         quat_tol)
@@ -430,15 +426,11 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     else:  # no acceleration: the specific force is gravity's
         for k in range(3):
             accel[k] = _GRAVITY * rotation[2, k]
-    if joints_ok:
-        for j in range(12):
-            joint_q[j] = q_in[j]
-            joint_dq[j] = dq_in[j]
-        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
-                       foot_jacobian, foot_angular_jacobian, legs_work)
-    flags |= contact_weights(new, dt, force_in, schedule, full_force, use_force > 0.5,
-                             force_on, force_off, force_full, stuck_s, recover_s, foot_contact,
-                             foot_same_s, foot_good_s, foot_reason, foot_last, weight)
+    flags |= legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params,
+                               rotations, translations, axes, foot_offsets, foot_position,
+                               foot_jacobian, foot_angular_jacobian, legs_work, joint_q,
+                               joint_dq, foot_contact, foot_same_s, foot_good_s, foot_reason,
+                               foot_last, weight)
     # --- prediction: the covariance on the unpropagated mean, then the mean
     _transition_blocks(rotation, x, dt, blocks)
     _propagate_covariance(P, blocks)
@@ -562,8 +554,8 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
     """Start on four loaded feet, at rest: orientation from the IMU (yaw 0 unless
     ``keep_yaw``), height from the feet on the floor, the base at ``(base_x, base_y)``,
     biases 0, and the priors' covariance. ``work`` (57,): scratch."""
-    sigma_pos, radius = params[6], params[18]
-    tilt, gyro_bias, accel_bias = params[20], params[21], params[22]
+    sigma_pos, radius = params[6], params[11]
+    tilt, gyro_bias, accel_bias = params[13], params[14], params[15]
     measured, align, quat = work[0:4], work[4:8], work[8:12]
     rotation = work[12:21].reshape((3, 3))
     legs_work = work[21:57].reshape((4, 3, 3))

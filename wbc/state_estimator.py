@@ -29,11 +29,12 @@ controller's contact schedule, into the controller's ``(q, v)``:
 
 Faults: a non-finite or non-unit quaternion, a non-finite gyroscope, accelerometer or
 joint reading, a repeated (stale) sample, no sample at all, a stance foot's sensor stuck on
-one value, a foot sensor at full scale. The estimate reports what it distrusts (:attr:`StateEstimate.faults`),
-goes on with the rest, and says when it has had no trustworthy sample for longer than
-``trust_timeout_s`` (:attr:`StateEstimate.usable`): the control loop then sends the
-controller's safe command. The README's "State estimation" section has the measurements
-behind the choices (the linear filter against a contact-aided invariant EKF).
+one value, a foot sensor at full scale. The estimate reports what it distrusts
+(:attr:`StateEstimate.faults`), goes on with the rest, and says when it has had no
+trustworthy sample for longer than ``trust_timeout_s`` (:attr:`StateEstimate.usable`): the
+control loop then sends the controller's safe command. The README's "What it measures"
+section has the measurements behind the choices (this filter against the contact-aided
+invariant EKF, :class:`wbc.InvariantEkf`, the default).
 """
 
 from __future__ import annotations
@@ -156,8 +157,14 @@ class SensorTrustConfig:
         return tuple(f.name for f in fields(cls))
 
     def _vector(self) -> np.ndarray:
-        return np.array([getattr(self, name) for name in self._PARAMS], dtype=float)
+        """The kernel's numbers: the subclass's ``_PARAMS``, then :data:`CONTACT_PARAMS`."""
+        return np.array([getattr(self, name) for name in (*self._PARAMS, *CONTACT_PARAMS)],
+                        dtype=float)
 
+
+#: The contact fusion's fields, the last of every estimator's kernel vector, in this order.
+CONTACT_PARAMS = ("full_trust_force_n", "use_foot_force", "foot_force_on", "foot_force_off",
+                  "foot_force_full_scale", "foot_sensor_stuck_s", "foot_sensor_recover_s")
 
 #: Valid range of each shared numeric field (a 0 lower bound is inclusive, others exclusive).
 _SHARED_RANGES: dict[str, tuple[float, float]] = {
@@ -200,10 +207,7 @@ class EstimatorConfig(SensorTrustConfig):
         "orientation_time_constant_s", "gyro_bias_time_constant_s", "quaternion_tolerance",
         "quaternion_timeout_s", "position_process_noise", "velocity_process_noise",
         "foot_process_noise", "foot_position_noise_m", "foot_velocity_noise_m_s",
-        "foot_height_noise_m", "swing_noise_scale", "min_contact_weight",
-        "full_trust_force_n", "use_foot_force", "foot_force_on", "foot_force_off",
-        "foot_force_full_scale", "foot_sensor_stuck_s", "foot_sensor_recover_s",
-        "foot_radius_m")
+        "foot_height_noise_m", "swing_noise_scale", "min_contact_weight", "foot_radius_m")
 
     orientation_time_constant_s: float = 0.05
     gyro_bias_time_constant_s: float = 10.0
@@ -364,6 +368,31 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
 
 
 @numba.njit(cache=True)
+def legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params, rotations,
+                      translations, axes, foot_offsets, foot_position, foot_jacobian,
+                      foot_angular_jacobian, legs_work, joint_q, joint_dq, foot_contact,
+                      foot_same_s, foot_good_s, foot_reason, foot_last,
+                      weight):  # pragma: no cover - compiled
+    """The joints (kept when usable), the legs' kinematics and each foot's contact weight
+    (:func:`contact_weights`); the contact flags.
+
+    ``params`` is the estimator's config vector; the contact fields are read from its end
+    (:data:`CONTACT_PARAMS`, every estimator's config ends with them in that order).
+    """
+    if joints_ok:
+        for j in range(12):
+            joint_q[j] = q_in[j]
+            joint_dq[j] = dq_in[j]
+        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
+                       foot_jacobian, foot_angular_jacobian, legs_work)
+    end = params.shape[0]
+    return contact_weights(new, dt, force_in, schedule, params[end - 7], params[end - 6] > 0.5,
+                           params[end - 5], params[end - 4], params[end - 3], params[end - 2],
+                           params[end - 1], foot_contact, foot_same_s, foot_good_s,
+                           foot_reason, foot_last, weight)
+
+
+@numba.njit(cache=True)
 def foot_motion(rotation, omega, joint_dq, origin, foot_position, foot_jacobian,
                 foot_angular_jacobian, radius, relative, velocity, rolling,
                 work):  # pragma: no cover - compiled
@@ -425,11 +454,9 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     ``work`` (:data:`_WORK_SIZE`) is scratch space: the tick allocates nothing.
     """
     (tau_q, tau_b, quat_tol, quat_timeout, sigma_p, sigma_v, sigma_f, sigma_pos, sigma_vel,
-     sigma_h, swing_scale, min_weight, full_force, use_force, force_on, force_off,
-     force_full, stuck_s, recover_s, radius) = (
+     sigma_h, swing_scale, min_weight, radius) = (
         params[0], params[1], params[2], params[3], params[4], params[5], params[6],
-        params[7], params[8], params[9], params[10], params[11], params[12], params[13],
-        params[14], params[15], params[16], params[17], params[18], params[19])
+        params[7], params[8], params[9], params[10], params[11], params[12])
     flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok = check_sample(
         fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock, dt_nominal,
         quat_tol)
@@ -475,15 +502,11 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     quat_normalize(quat)
     quat_rotation(quat, rotation)
     # --- legs and contacts
-    if joints_ok:
-        for j in range(12):
-            joint_q[j] = q_in[j]
-            joint_dq[j] = dq_in[j]
-        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
-                       foot_jacobian, foot_angular_jacobian, legs_work)
-    flags |= contact_weights(new, dt, force_in, schedule, full_force, use_force > 0.5,
-                             force_on, force_off, force_full, stuck_s, recover_s, foot_contact,
-                             foot_same_s, foot_good_s, foot_reason, foot_last, weight)
+    flags |= legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params,
+                               rotations, translations, axes, foot_offsets, foot_position,
+                               foot_jacobian, foot_angular_jacobian, legs_work, joint_q,
+                               joint_dq, foot_contact, foot_same_s, foot_good_s, foot_reason,
+                               foot_last, weight)
     foot_motion(rotation, omega, joint_dq, imu_offset, foot_position, foot_jacobian,
                 foot_angular_jacobian, radius, relative, velocity, rolling, motion_work)
     # --- prediction: the accelerometer, world frame
@@ -573,7 +596,7 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
            keep_yaw):  # pragma: no cover - compiled
     """Start on four loaded feet: orientation from the IMU (yaw 0 unless ``keep_yaw``),
     height from the feet on the floor, the base at ``(base_x, base_y)``, at rest."""
-    sigma_pos, sigma_h, radius = params[7], params[9], params[19]
+    sigma_pos, sigma_h, radius = params[7], params[9], params[12]
     measured = quat_in / math.sqrt(quat_in[0] ** 2 + quat_in[1] ** 2 + quat_in[2] ** 2
                                    + quat_in[3] ** 2)
     yaw = 0.0 if keep_yaw else quat_yaw(measured)
