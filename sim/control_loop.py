@@ -73,10 +73,15 @@ class ControlLoop:
 
         Raises:
             UnknownNameError: An unknown ``state``.
-            ConfigurationError: ``truth`` from a robot that does not know its exact state,
-                or a first sample the estimator cannot start from (the field named).
+            ConfigurationError: ``truth`` from a robot that does not know its exact state or
+                with an estimator, or a first sample the estimator cannot start from (the
+                field named).
         """
         check_name("state source", state, STATE_SOURCES)
+        if state == "truth" and estimator is not None:
+            raise ConfigurationError(
+                "estimator: given with state='truth', which reads no sensors; give "
+                "state='estimate' (the default) to run it")
         self.robot = MappedRobot(robot, aliases=aliases)
         self.controller = controller
         self.state_source = state

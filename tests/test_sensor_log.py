@@ -13,7 +13,7 @@ from sim.cli import main
 from sim.control_loop import ControlLoop
 from wbc import WholeBodyController, make_estimator
 from wbc.control_output import ControlStatus
-from wbc.errors import ConfigurationError
+from wbc.errors import ConfigurationError, UnknownNameError
 from wbc.sensor_log import SensorLog, log_row
 
 
@@ -95,3 +95,16 @@ def test_a_log_without_sensor_arrays_or_samples_is_refused(tmp_path):
         RecordedRobot(empty)
     with pytest.raises(ConfigurationError, match=r"^log: expected a SensorLog"):
         RecordedRobot(str(path))  # type: ignore[arg-type]
+
+
+def test_a_loop_states_what_it_cannot_do(logged):
+    path, _ = logged
+    robot = RecordedRobot(SensorLog.load(path))
+    with pytest.raises(ConfigurationError, match=r"^state: RecordedRobot reports sensors only, "
+                                                 r"not its exact state; estimate it"):
+        ControlLoop(robot, WholeBodyController(), state="truth")
+    with pytest.raises(ConfigurationError, match=r"^estimator: given with state='truth'"):
+        ControlLoop.simulated(state="truth", estimator=make_estimator())
+    with pytest.raises(UnknownNameError, match=r"^unknown state source 'exact'; valid state "
+                                               r"sources: estimate, truth"):
+        ControlLoop.simulated(state="exact")
