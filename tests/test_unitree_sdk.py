@@ -19,6 +19,7 @@ from wbc.unitree_sdk import (
     VEL_STOP_F,
     SdkLowState,
     SdkMotorCommand,
+    sensor_record_from_message,
 )
 
 S = np.sqrt(0.5)  # cos(45 deg) = sin(45 deg)
@@ -331,6 +332,24 @@ def test_from_message():
     with pytest.raises(ConfigurationError, match="^low_state: expected a LowState_ .* received "
                                                  "SimpleNamespace: .*gyroscope"):
         SdkLowState.from_message(msg)
+
+
+def test_to_message_is_read_back_as_it_was():
+    rng = np.random.default_rng(4)
+    state = SdkLowState(**state_fields(
+        imu_quaternion_wxyz=[S, 0.0, S, 0.0], gyroscope_rad_s=rng.normal(size=3),
+        q=rng.normal(size=12), dq=rng.normal(size=12), tau_est=rng.normal(size=12),
+        foot_force=[10, 20, 30, 40]), tick=77)
+    msg = state.to_message()
+    assert len(msg.motor_state) == SDK_MOTOR_SLOTS
+    assert all(m.q == 0.0 for m in msg.motor_state[12:])
+    back = SdkLowState.from_message(msg)
+    for name in ("imu_quaternion_wxyz", "gyroscope_rad_s", "accelerometer_m_s2", "q", "dq",
+                 "tau_est", "foot_force"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(state, name), err_msg=name)
+    assert back.tick == 77
+    record = sensor_record_from_message(msg)
+    np.testing.assert_array_equal(record.q, state.sensor_record().q)
 
 
 def test_bad_states_name_the_field():

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -383,6 +384,23 @@ class SdkLowState:
         """
         return _record(self.imu_quaternion_wxyz, self.gyroscope_rad_s, self.accelerometer_m_s2,
                        self.q, self.dq, self.tau_est, self.foot_force, self.tick, stamp_s)
+
+    def to_message(self) -> SimpleNamespace:
+        """This sample shaped as a ``LowState_``: ``imu_state.quaternion``, ``.gyroscope``,
+        ``.accelerometer``; ``motor_state[0..19].q``, ``.dq``, ``.tau_est`` (slots 12-19
+        zero); ``foot_force``; ``tick``. A stand-in for a robot's message wherever code
+        reads one (:meth:`from_message`, :func:`sensor_record_from_message`): tests,
+        examples, a simulator speaking as the robot does.
+        """
+        motors = [SimpleNamespace(q=0.0, dq=0.0, tau_est=0.0) for _ in range(SDK_MOTOR_SLOTS)]
+        for k in range(SDK_LEG_MOTORS):
+            motors[k] = SimpleNamespace(q=float(self.q[k]), dq=float(self.dq[k]),
+                                        tau_est=float(self.tau_est[k]))
+        imu = SimpleNamespace(quaternion=self.imu_quaternion_wxyz.tolist(),
+                              gyroscope=self.gyroscope_rad_s.tolist(),
+                              accelerometer=self.accelerometer_m_s2.tolist())
+        return SimpleNamespace(imu_state=imu, motor_state=motors,
+                               foot_force=self.foot_force.tolist(), tick=self.tick)
 
     def foot_forces_by_leg(self) -> dict[str, float]:
         """The raw foot force readings by leg, in the description's leg order (FL, FR, RL, RR)."""
