@@ -66,7 +66,7 @@ def test_controller_output_is_a_motor_command_with_swing_gains_on_a_raised_leg(d
 
 
 @pytest.mark.parametrize(("field", "value", "message"), [
-    ("stance_kp", -1.0, r"stance_kp: expected a value in \[0, inf\], received -1"),
+    ("stance_kp", -1.0, r"stance_kp: expected a value in \[0, 500\], received -1"),
     ("swing_kd", 80.0, r"swing_kd: expected a value in \[0, 50\], received 80"),
     ("known_joint_friction", (0.2, -0.1, 1.0),
      r"known_joint_friction \(thigh\): expected a value in \[0, 10\], received -0.1"),

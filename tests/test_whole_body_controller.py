@@ -1,5 +1,8 @@
 """The QP controller: constraint satisfaction, physics consistency, failures, bad input."""
 
+import math
+from dataclasses import fields, replace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -127,6 +130,23 @@ def test_infeasible_qp_names_the_group_and_commands_the_relaxed_solution(standin
     assert c.step(standing, np.zeros(18)).status is ControlStatus.RELAXED  # still consistent
 
 
+def test_diagnose_names_nothing_on_a_feasible_qp_and_the_culprit_on_an_infeasible_one(
+        controller, standing):
+    assert controller.step(standing, np.zeros(18)).ok
+    assert controller.diagnose() == ("", None)  # it used to name "torque limits" here
+    controller.set_max_normal_force("FR", 0.0)
+    controller.set_swing("FR")
+    assert controller.step(standing, np.zeros(18)).ok
+    assert controller.diagnose() == ("", None)
+    # Torque limits of 0.1 % of the URDF's: standing on three feet is impossible.
+    controller.tau_max = 1e-3 * controller.tau_max
+    out = controller.step(standing, np.zeros(18))  # the new limits reach the QP
+    assert out.status is ControlStatus.RELAXED and out.infeasible_group == "torque limits"
+    group, relaxed = controller.diagnose()
+    assert group == "torque limits"
+    assert relaxed is not None and relaxed.found
+
+
 def test_fallback_damps_joint_velocity(controller, standing):
     controller.step(standing, np.zeros(18))
     good = controller._tau_good.copy()
@@ -184,14 +204,64 @@ def test_foot_positions_are_the_feet_in_leg_order(controller, standing):
 
 
 def test_bad_parameters_are_named():
-    with pytest.raises(ConfigurationError, match="unknown parameter\\(s\\) \\['friction'\\]; valid parameters: backend"):
-        WholeBodyController(friction="high")
+    with pytest.raises(ConfigurationError, match=r"^unknown controller parameter\(s\) "
+                                                 r"\['friction', 'kp'\]; valid controller "
+                                                 r"parameters: backend, eliminate_dynamics, "):
+        WholeBodyController(friction="high", kp=1.0)
+    with pytest.raises(UnknownNameError, match=r"^unknown controller parameter 'friction'; "
+                                               r"valid controller parameters: backend, "
+                                               r"eliminate_dynamics, .*, "
+                                               r"friction_velocity_scale_rad_s$"):
+        ControllerConfig(friction="high")  # not Python's bare TypeError
+    with pytest.raises(UnknownNameError, match=r"^unknown controller parameter 'kp'"):
+        replace(ControllerConfig(), kp=1.0)
     with pytest.raises(ConfigurationError, match="friction_coefficient: expected a value in \\(0, 5\\], received 0"):
         ControllerConfig(friction_coefficient=0.0)
     with pytest.raises(ConfigurationError, match="min_normal_force_n: expected less than max_normal_force_n"):
         ControllerConfig(min_normal_force_n=300.0)
     with pytest.raises(UnknownNameError, match="unknown backend 'gurobi'; installed backends: daqp"):
         WholeBodyController(backend="gurobi")
+
+
+def every_bad_value(config: ControllerConfig):
+    """``(field, value, range text)``: one value below and one above each numeric field's
+    range, a NaN and a string, for every numeric field."""
+    for f in fields(ControllerConfig):
+        if f.name in ("backend", "eliminate_dynamics"):
+            continue
+        low, high, inclusive = ControllerConfig.RANGES.get(f.name, (0.0, None, True))
+        interval = f"{'[' if inclusive else '('}{low:g}, {'inf' if high is None else f'{high:g}'}]"
+        bad = [low - 1.0 if inclusive else low, math.nan, "high"]
+        if high is not None:
+            bad.append(high * 2.0)
+        for value in bad:
+            if f.name in ControllerConfig.PER_JOINT_TYPE:
+                yield f.name, (0.0, 0.0, value), f"{f.name} (calf)", interval
+            else:
+                yield f.name, value, f.name, interval
+
+
+def test_every_bad_value_names_the_field_and_its_range():
+    checked = 0
+    for name, value, label, interval in every_bad_value(ControllerConfig()):
+        with pytest.raises(ConfigurationError) as err:
+            ControllerConfig(**{name: value})
+        assert str(err.value).startswith(f"{label}: expected a "), (name, value)
+        assert f" {interval}, received " in str(err.value), (name, value, str(err.value))
+        checked += 1
+    assert checked > 100
+    # A stance gain below its range used to report [0, inf], the range of the first check.
+    with pytest.raises(ConfigurationError, match=r"^stance_kp: expected a value in \[0, 500\], "
+                                                 r"received -1$"):
+        ControllerConfig(stance_kp=-1.0)
+    with pytest.raises(NonFiniteError, match=r"^com_kp: expected a finite number in \[0, inf\], "
+                                             r"received nan$"):
+        ControllerConfig(com_kp=math.nan)
+    with pytest.raises(ConfigurationError, match=r"^backend: expected a backend name such as "
+                                                 r"'daqp' \(wbc.backends.available_backends\(\)"):
+        ControllerConfig(backend=3)
+    with pytest.raises(ConfigurationError, match=r"^eliminate_dynamics: expected True or False"):
+        ControllerConfig(eliminate_dynamics=1)
 
 
 def test_contact_changes_are_validated(controller):

@@ -5,16 +5,29 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import ClassVar
 
-from wbc.errors import ConfigurationError
-from wbc.validation import as_float
+import numpy as np
+
+from wbc.errors import ConfigurationError, NonFiniteError
+from wbc.validation import as_float, known_fields_only
+
+#: ``(low, high, low_inclusive)`` ranges: ``[0, inf]``, that of every numeric field
+#: :attr:`ControllerConfig.RANGES` does not name, and ``(0, inf]``.
+_NON_NEGATIVE = (0.0, None, True)
+_POSITIVE = (0.0, None, False)
 
 
+@known_fields_only("controller parameter")
 @dataclass(frozen=True)
 class ControllerConfig:
     """Parameters of :class:`wbc.WholeBodyController`; defaults are tuned for the GO2.
 
     Gains are per task: ``*_kp`` [1/s^2]; damping is critical (``2 sqrt(kp)``).
     Weights are relative cost weights of the task terms.
+
+    Raises:
+        UnknownNameError: A keyword that is not a field (the message lists the fields).
+        ConfigurationError: A value of the wrong type or out of its range (the message names
+            the field and its range: :attr:`RANGES`, ``[0, inf]`` for the others).
     """
 
     #: QP backend name (``wbc.backends.available_backends()`` lists them).
@@ -102,35 +115,40 @@ class ControllerConfig:
 
     #: Fields that hold one value per joint type (hip, thigh, calf).
     PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ("known_joint_damping", "known_joint_friction")
+    #: ``(low, high, low_inclusive)`` of the numeric fields whose range is not ``[0, inf]``
+    #: (``None``: unbounded); a per-joint-type field's range is that of each of its values.
+    RANGES: ClassVar[dict[str, tuple[float, float | None, bool]]] = {
+        "control_period_s": (1e-4, 0.01, True),
+        "friction_coefficient": (0.0, 5.0, False),
+        "max_normal_force_n": _POSITIVE,
+        "torque_limit_fraction": (0.0, 1.0, False),
+        "joint_limit_horizon_s": _POSITIVE,
+        "support_omega": _POSITIVE,
+        "stance_kp": (0.0, 500.0, True),
+        "stance_kd": (0.0, 50.0, True),
+        "swing_kp": (0.0, 500.0, True),
+        "swing_kd": (0.0, 50.0, True),
+        "known_joint_damping": (0.0, 10.0, True),
+        "known_joint_friction": (0.0, 10.0, True),
+        "friction_velocity_scale_rad_s": _POSITIVE,
+    }
 
     def __post_init__(self) -> None:
-        as_float("torque_limit_fraction", self.torque_limit_fraction, low=0.0, high=1.0,
-                 low_inclusive=False)
-        as_float("friction_coefficient", self.friction_coefficient, low=0.0, high=5.0,
-                 low_inclusive=False)
-        as_float("control_period_s", self.control_period_s, low=1e-4, high=0.01)
-        positive = {"control_period_s", "max_normal_force_n", "joint_limit_horizon_s",
-                    "support_omega", "friction_velocity_scale_rad_s"}
         for f in fields(self):
             if f.name == "backend":
                 if not isinstance(self.backend, str) or not self.backend:
                     raise ConfigurationError(
-                        f"backend: expected a backend name, received {self.backend!r}")
-                continue
-            if f.name == "eliminate_dynamics":
+                        f"backend: expected a backend name such as 'daqp' "
+                        f"(wbc.backends.available_backends() lists the installed ones), "
+                        f"received {self.backend!r}")
+            elif f.name == "eliminate_dynamics":
                 if not isinstance(self.eliminate_dynamics, bool):
                     raise ConfigurationError(f"eliminate_dynamics: expected True or False, "
                                              f"received {self.eliminate_dynamics!r}")
-                continue
-            if f.name in self.PER_JOINT_TYPE:
+            elif f.name in self.PER_JOINT_TYPE:
                 self._check_per_joint_type(f.name)
-                continue
-            value = getattr(self, f.name)
-            as_float(f.name, value, low=0.0, low_inclusive=f.name not in positive)
-        for name in ("stance_kp", "swing_kp"):
-            as_float(name, getattr(self, name), low=0.0, high=500.0)
-        for name in ("stance_kd", "swing_kd"):
-            as_float(name, getattr(self, name), low=0.0, high=50.0)
+            else:
+                _in_range(f.name, getattr(self, f.name), self.RANGES.get(f.name, _NON_NEGATIVE))
         if self.min_normal_force_n >= self.max_normal_force_n:
             raise ConfigurationError(
                 f"min_normal_force_n: expected less than max_normal_force_n "
@@ -143,5 +161,18 @@ class ControllerConfig:
             raise ConfigurationError(
                 f"{name}: expected three numbers (hip, thigh, calf), received {value!r}")
         for joint_type, item in zip(("hip", "thigh", "calf"), value):
-            as_float(f"{name} ({joint_type})", item, low=0.0, high=10.0)
+            _in_range(f"{name} ({joint_type})", item, self.RANGES[name])
         object.__setattr__(self, name, tuple(float(item) for item in value))
+
+
+def _in_range(name: str, value: object, bounds: tuple[float, float | None, bool]) -> None:
+    """Check one number against ``(low, high, low_inclusive)``; every message names the range."""
+    low, high, low_inclusive = bounds
+    interval = f"{'[' if low_inclusive else '('}{low:g}, {'inf' if high is None else f'{high:g}'}]"
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ConfigurationError(f"{name}: expected a number in {interval}, received {value!r}")
+    try:
+        as_float(name, value, low=low, high=high, low_inclusive=low_inclusive)
+    except NonFiniteError:
+        raise NonFiniteError(
+            f"{name}: expected a finite number in {interval}, received {value!r}") from None

@@ -11,23 +11,23 @@ import numba
 import numpy as np
 import pinocchio as pin
 
-from tasks import (
-    BaseOrientationTask,
-    ComTask,
-    Constraint,
-    ContactTask,
-    FloatingBaseDynamics,
-    FramePositionTask,
-    FrictionCones,
-    JointLimits,
-    PostureTask,
-    RobotKinematics,
-    StanceContacts,
-    SupportPolygonBarrier,
-    Task,
-    TorqueLimits,
-)
+# The tasks' modules, not the package: `import tasks` imports wbc, and with it this module,
+# before the package has any names (see wbc/__init__.py).
+from tasks.base_orientation_task import BaseOrientationTask
+from tasks.com_task import ComTask
 from tasks.compiled_call import bind_compiled
+from tasks.constraint import Constraint
+from tasks.contact_task import ContactTask
+from tasks.floating_base_dynamics import FloatingBaseDynamics
+from tasks.frame_position_task import FramePositionTask
+from tasks.friction_cones import FrictionCones
+from tasks.joint_limits import JointLimits
+from tasks.kinematics import RobotKinematics
+from tasks.posture_task import PostureTask
+from tasks.stance_contacts import StanceContacts
+from tasks.support_polygon_barrier import SupportPolygonBarrier
+from tasks.task import Task
+from tasks.torque_limits import TorqueLimits
 from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
 from wbc.contact_modes import ContactModes
 from wbc.control_output import ControlOutput, ControlStatus
@@ -94,12 +94,22 @@ class WholeBodyController(ContactModes):
             extra_frames: Frames (besides the feet and the base) whose kinematics tasks added
                 with :meth:`add_task` will read, e.g. ``("FR_calf",)``.
             **overrides: Fields of :class:`ControllerConfig` to change, e.g. ``backend="osqp"``.
+
+        Raises:
+            ConfigurationError: An override that is not a field of :class:`ControllerConfig`
+                (the message names every unknown one and lists the fields), a value out of
+                its range (the message names the field and the range), or an unknown frame
+                in ``extra_frames``.
+            UnknownNameError: A backend that is not installed (the message lists those that
+                are).
         """
         base = config or ControllerConfig()
         unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
-        if unknown:
+        if unknown:  # all of them at once (ControllerConfig itself names the first)
             valid = ", ".join(ControllerConfig.__dataclass_fields__)
-            raise ConfigurationError(f"unknown parameter(s) {unknown}; valid parameters: {valid}")
+            raise ConfigurationError(
+                f"unknown controller parameter(s) {unknown}; valid controller parameters: "
+                f"{valid}")
         self.config = replace(base, **overrides)
         cfg = self.config
         self.description = description or Go2Description.default()
@@ -409,7 +419,7 @@ class WholeBodyController(ContactModes):
                 result, status = retry, ControlStatus.RESOLVED
                 message += "; the problem is feasible: commanded a fresh DAQP solution"
             else:
-                group, relaxed = self.diagnose()
+                group, relaxed = self._blame(full)
                 if group:
                     message += f"; infeasible constraint group: {group}"
                 if relaxed is None:
@@ -520,15 +530,24 @@ class WholeBodyController(ContactModes):
         return DaqpBackend().solve(problem)
 
     def diagnose(self) -> tuple[str, QpResult | None]:
-        """Name the constraint group that makes the current QP infeasible.
+        """Name the constraint group that makes the current QP infeasible, if one does.
 
-        Re-solves copies of the full problem with one group relaxed at a time (off the hot
-        path, only after a failure), limits before physics; the first group whose relaxation
-        makes it solvable is named. Returns the name ('' if none) and, when that group is a
-        limit (not physics), the relaxed problem's solution, usable as a command.
+        First solves the full problem (with a fresh DAQP workspace): a feasible problem
+        names nothing, and the result is ``("", None)``; a failed solve of a feasible problem
+        is the solver's failure, not a constraint's. Only an infeasible problem is searched:
+        copies of it are re-solved with one group relaxed at a time (off the hot path),
+        limits before physics, and the first group whose relaxation makes it solvable is
+        named. Returns the name ('' if none) and, when that group is a limit (not physics),
+        the relaxed problem's solution, usable as a command.
         """
         problem = self.builder.assemble_full()
         self.builder.reduced = False
+        if self._fresh_solve(problem).found:
+            return "", None
+        return self._blame(problem)
+
+    def _blame(self, problem: QpProblem) -> tuple[str, QpResult | None]:
+        """:meth:`diagnose` for a full ``problem`` already known to be infeasible."""
         layout = self.builder.layout
         groups = np.array(problem.row_groups)
         forces = slice(layout.force_start, layout.slack_start)
