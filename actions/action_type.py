@@ -7,7 +7,8 @@ same.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,9 +29,13 @@ from actions.messages import (
     StandGoal,
     StandResult,
 )
-from wbc.errors import ConfigurationError
+from wbc.errors import ConfigurationError, UnknownNameError
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "interfaces"
+#: The ROS 2 package of this library's own interfaces (HighFive, Stand, Sit).
+GO2_INTERFACES_PACKAGE = "go2_interfaces"
+#: A ROS 2 package name (REP 144): lower case letters, digits and underscores.
+_PACKAGE_NAME = re.compile(r"[a-z][a-z0-9_]*$")
 
 
 @dataclass(frozen=True)
@@ -45,6 +50,8 @@ class ActionType:
         failure_result: Builds a failure result from a message. The runner uses it only when
             a behaviour's own ``abort_result`` raises or returns the wrong type, so that every
             goal still ends with a result of ``result_type``.
+        package: The ROS 2 package that defines the interface (``"control_msgs"`` for
+            FollowJointTrajectory); :attr:`type_name` is the full name.
     """
 
     name: str
@@ -52,8 +59,14 @@ class ActionType:
     result_type: type
     feedback_type: type
     failure_result: Callable[[str], Any]
+    package: str = GO2_INTERFACES_PACKAGE
 
     def __post_init__(self) -> None:
+        if not isinstance(self.package, str) or not _PACKAGE_NAME.match(self.package):
+            raise ConfigurationError(
+                f"ActionType {self.name!r}: package must be a ROS 2 package name (lower case "
+                f"letters, digits and underscores, e.g. {GO2_INTERFACES_PACKAGE!r}); received "
+                f"{self.package!r}")
         for attribute in ("goal_type", "result_type", "feedback_type"):
             value = getattr(self, attribute)
             if not isinstance(value, type):
@@ -86,6 +99,44 @@ class ActionType:
         """The shipped ``.action`` file that defines this interface."""
         return INTERFACES_DIR / f"{self.name}.action"
 
+    @property
+    def type_name(self) -> str:
+        """The full name, as ``ros2 action list -t`` prints it: ``go2_interfaces/action/HighFive``."""
+        return f"{self.package}/action/{self.name}"
+
+    def is_named(self, text: str) -> bool:
+        """Whether ``text`` names this interface in a form ROS 2 takes: ``HighFive``,
+        ``go2_interfaces/HighFive`` or ``go2_interfaces/action/HighFive``."""
+        return text in (self.name, f"{self.package}/{self.name}", self.type_name)
+
+
+def action_type_named(text: str, types: Iterable[ActionType] | None = None) -> ActionType:
+    """The action type ``text`` names: ``HighFive``, ``go2_interfaces/HighFive`` or
+    ``go2_interfaces/action/HighFive`` (as ``ros2 action send_goal`` and ``ros2 interface
+    show`` take them).
+
+    Args:
+        text: The name.
+        types: The types to choose from (default: :data:`ACTION_TYPES`).
+
+    Raises:
+        UnknownNameError: No such type; the message lists the valid full names (and the
+            right package when only the package is wrong).
+    """
+    candidates = sorted(ACTION_TYPES.values() if types is None else types,
+                        key=lambda t: t.type_name)
+    for action_type in candidates:
+        if action_type.is_named(text):
+            return action_type
+    last = text.rsplit("/", 1)[-1]
+    same_name = [t.type_name for t in candidates if t.name == last]
+    hint = f" ({last} is {' or '.join(same_name)})" if same_name else ""
+    if not candidates:
+        raise UnknownNameError(f"unknown action type {text!r}; there are no action types")
+    valid = ", ".join(t.type_name for t in candidates)
+    raise UnknownNameError(f"unknown action type {text!r}{hint}; valid action types: {valid} "
+                           f"(or the last part alone, e.g. {candidates[-1].name})")
+
 
 def _behaviour_action(
     name: str,
@@ -116,6 +167,7 @@ FOLLOW_JOINT_TRAJECTORY = ActionType(
     failure_result=lambda message: FollowJointTrajectoryResult(
         error_code=FollowJointTrajectoryResult.INVALID_GOAL, error_string=message
     ),
+    package="control_msgs",
 )
 
 #: Every action type shipped with the library, by interface name.

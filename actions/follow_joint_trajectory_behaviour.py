@@ -18,20 +18,25 @@ is valid. A client sees them as ``GoalRejectedError.rejection.code`` / ``.messag
 have changed while it was queued); a failure then ends the goal ABORTED with the code in
 ``result.error_code``. Failures during execution end ABORTED with
 ``PATH_TOLERANCE_VIOLATED`` (-4) or ``GOAL_TOLERANCE_VIOLATED`` (-5); success is
-``SUCCESSFUL`` (0) with an empty ``error_string``. A canceled goal, as in ROS 2's
-joint_trajectory_controller, has ``error_code`` 0; its status says CANCELED.
+``SUCCESSFUL`` (0), with an ``error_string`` that says the goal was reached and what state it
+leaves the robot in (joint_trajectory_controller also fills it on success). A canceled goal, as
+in ROS 2's joint_trajectory_controller, has ``error_code`` 0; its status says CANCELED.
 
-After the goal ends, however it ends, the leg stays in swing, holding where it stopped: its
-joint targets are frozen and its foot task holds the foot there (the same joint configuration),
-so that a later Stand (or Sit, or HighFive) puts the foot down as it does for any foot in the
-air. A later FollowJointTrajectory goal for the same leg starts at once, without a release.
+After the goal ends, however it ends (except a cancel during the release), the foot stays
+up: the leg stays in swing, holding where it stopped, and the robot stands on the other three
+feet. Its joint targets are frozen and its foot task holds the foot there (the same joint
+configuration), so that a later Stand (or Sit) puts the foot down as it does for any foot in
+the air; the result's ``error_string`` says so. A later FollowJointTrajectory goal for the same
+leg starts at once, without a release. (control_msgs' goal has no field to ask for the foot to
+be put down at the end, and this server adds none.)
 
-Feedback (at every phase change and at least every 20 ms) carries the robot time in
-``header.stamp`` and, as this server's convention (the message has no phase field), the phase
-in ``header.frame_id``: ``"shifting"`` and ``"unloading"`` while the leg is released,
-``"waiting"`` until a future ``header.stamp``, ``"following"`` during the trajectory,
-``"settling"`` after the last point's time while the goal tolerance is not yet met, then
-``"succeeded"``, ``"aborted"`` or ``"canceled"``.
+Feedback, as control_msgs defines it, has no phase: ``header.stamp`` is the robot time and
+``header.frame_id`` is empty (as ros2_controllers' joint_trajectory_controller leaves it);
+``desired``, ``actual`` and ``error`` are the goal's joints. ``desired.time_from_start`` is the
+trajectory time reached: 0 while the leg is being released and until a future
+``header.stamp``, then advancing with the clock, and beyond the last point's time while the
+goal tolerance is awaited. Feedback comes at every change of this server's internal phase
+(:data:`PHASES`) and at least every 20 ms.
 """
 
 from __future__ import annotations
@@ -81,9 +86,12 @@ DEFAULT_GOAL_TIME_TOLERANCE_S = 0.5
 #: three FR joints by up to 1.1 rad): final error 2.5 mrad at 1, 0.2 mrad at 10, below
 #: 0.05 mrad from 100 on; the peak error during the move is 2.7 mrad from 10 on.
 TRACKING_WEIGHT = 100.0
-#: Feedback is published at every phase change and at least this often [s] in between.
-#: Feedback phase names of the release.
+#: Internal phase names of the release.
 RELEASE_PHASES = {LiftPhase.SHIFTING: "shifting", LiftPhase.UNLOADING: "unloading"}
+#: Every internal phase, in order. Not in the feedback (control_msgs' has no phase field): a
+#: change of phase publishes a feedback message at once.
+PHASES = ("shifting", "unloading", "waiting", "following", "settling", "succeeded", "aborted",
+          "canceled")
 #: Largest base tilt [deg] at which a goal is accepted.
 MAX_TILT_DEG = 5.0
 
@@ -327,8 +335,8 @@ class FollowJointTrajectoryBehaviour(
         actual = self._measured()
         if self._cancel_reason:
             return StepResult.canceled(Result(error_string=(
-                f"canceled ({self._cancel_reason}) at t={t:.3f} s of the trajectory: the "
-                f"{plan.leg} leg holds where it was, in swing")),
+                f"canceled ({self._cancel_reason}) at t={t:.3f} s of the trajectory: "
+                f"{_left_in_swing(plan.leg, 'where it was')}")),
                 self._feedback(now_s, "canceled", t, self._hold, actual))
         return self._track(now_s, t, actual)
 
@@ -350,8 +358,9 @@ class FollowJointTrajectoryBehaviour(
         late = t - plan.duration_s
         if not violation and not moving:
             self._release_leg(desired[0])
-            return StepResult.succeeded(Result(),
-                                        self._feedback(now_s, "succeeded", t, desired, actual))
+            return StepResult.succeeded(
+                Result(error_string=f"goal reached: {_left_in_swing(plan.leg, 'the last point')}"),
+                self._feedback(now_s, "succeeded", t, desired, actual))
         if not violation or (not moving and late <= plan.goal_time_tolerance_s):
             phase = "following" if moving else "settling"
             return StepResult.running(self._feedback(now_s, phase, t, desired, actual))
@@ -367,7 +376,7 @@ class FollowJointTrajectoryBehaviour(
                     f"(goal_time_tolerance {plan.goal_time_tolerance_s:g} s)")
         return StepResult.aborted(Result(error_code=code, error_string=(
             f"{when}: {violation} ({field}; 0 = the default {default:g} rad, -1 = no limit); "
-            f"the {plan.leg} leg holds where it was, in swing")),
+            f"{_left_in_swing(plan.leg, 'where it was')}")),
             self._feedback(now_s, "aborted", t, desired, actual))
 
     def cancel(self, now_s: float, reason: str) -> None:
@@ -452,7 +461,7 @@ class FollowJointTrajectoryBehaviour(
             desired = (desired, np.zeros_like(desired), np.zeros_like(desired))
         when = Duration.from_seconds(max(t, 0.0))
         return FollowJointTrajectoryFeedback(
-            header=Header(stamp=Time.from_seconds(now_s), frame_id=phase),
+            header=Header(stamp=Time.from_seconds(now_s)),
             joint_names=list(self._plan.joint_names),
             desired=JointTrajectoryPoint(positions=desired[0], velocities=desired[1],
                                          accelerations=desired[2], time_from_start=when),
@@ -492,6 +501,12 @@ class JointSpline:
 
 
 # ---------------------------------------------------------------------- validation helpers
+
+
+def _left_in_swing(leg: str, where: str) -> str:
+    """What a goal that ends with the leg free leaves the robot in, and what puts it back."""
+    return (f"the {leg} leg holds {where}, in swing: the {leg} foot stays up and the robot "
+            f"stands on three feet; a Stand goal puts the foot down")
 
 
 def _description() -> Go2Description:

@@ -1,11 +1,11 @@
 """``go2-wbc send-goal``, ``actions`` and ``interface``: ``ros2 action`` habits on a simulated GO2.
 
-``go2-wbc send-goal high_five "{target_height: 0.4, hold_seconds: 2}" --feedback`` does what
-``ros2 action send_goal /high_five go2_high_five/action/HighFive "{...}" --feedback`` does,
-for any served action, against a fresh simulated GO2: it prints the goal, its id and
-acceptance, a line per feedback message with ``--feedback``, the result and the final
-status. ``go2-wbc actions`` is ``ros2 action list -t``; ``go2-wbc interface high_five`` is
-``ros2 interface show``.
+``go2-wbc send-goal /high_five go2_interfaces/action/HighFive "{...}" --feedback`` does what
+``ros2 action send_goal`` does with the same arguments (the type may be left out), for any
+served action, against a fresh simulated GO2: it prints the goal, its id and acceptance, a
+line per feedback message with ``--feedback``, the result and the final status. ``go2-wbc
+actions`` is ``ros2 action list -t``; ``go2-wbc interface go2_interfaces/action/HighFive`` (or
+``high_five``) is ``ros2 interface show``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import IO, TYPE_CHECKING, Any
 import yaml
 
 from actions.action_client import ActionClient
-from actions.action_type import ACTION_TYPES, ActionType
+from actions.action_type import ACTION_TYPES, ActionType, action_type_named
 from actions.go2_actions import GO2_ACTIONS
 from actions.goal_status import GoalStatus
 from actions.message_fields import set_message_fields
@@ -51,20 +51,25 @@ FEEDBACK_DIGITS = 6
 DEFAULT_TIMEOUT_S = 300.0
 
 SEND_GOAL_HELP = """\
-the goal is a YAML (or JSON) mapping of the goal's fields, as ros2 action send_goal takes it;
-fields left out keep their defaults (0, empty). Nested messages are mappings, a duration is
-{sec: 1, nanosec: 0} or a number of seconds. 'go2-wbc interface ACTION' shows the fields.
+the arguments are those of ros2 action send_goal: the action, its type (optional here; if
+given, it must be the action's: go2_interfaces/action/HighFive, go2_interfaces/HighFive or
+HighFive), and the goal as a YAML (or JSON) mapping of its fields; fields left out keep their
+defaults (0, empty). Nested messages are mappings, a duration is {sec: 1, nanosec: 0} or a
+number of seconds. 'go2-wbc actions' lists the actions and their types, 'go2-wbc interface
+ACTION' shows the fields.
 
 examples:
   go2-wbc send-goal high_five "{target_height: 0.4, hold_seconds: 2}" --feedback
+  go2-wbc send-goal /high_five go2_interfaces/action/HighFive "{target_height: 0.4}"
   go2-wbc send-goal stand "{duration_s: 1.5}"
   go2-wbc send-goal follow_joint_trajectory "{trajectory: {joint_names: [FR_calf_joint],
       points: [{positions: [-1.9], time_from_start: {sec: 1}}]}}" --feedback
 
 output: the goal, 'Goal accepted with ID: N' (or the rejection's code and reason), with
 --feedback one line per feedback message with its simulated time, the result, and 'Goal
-finished with status: SUCCEEDED' (or CANCELED, ABORTED). Bad YAML, an unknown field or a
-value of the wrong type is a usage error (exit 2) naming the field.
+finished with status: SUCCEEDED' (or CANCELED, ABORTED). An action that is not served, a type
+that is not the action's, bad YAML, an unknown field or a value of the wrong type is a usage
+error (exit 2) naming the argument or the field.
 
 """
 
@@ -81,21 +86,44 @@ def _served_action(text: str) -> tuple[str, ActionType]:
     return name, GO2_ACTIONS[name]
 
 
+def _action_type(text: str) -> ActionType:
+    """An argparse type: an action type, in any form ``ros2 action send_goal`` takes
+    (``go2_interfaces/action/HighFive``, ``go2_interfaces/HighFive``, ``HighFive``)."""
+    try:
+        return action_type_named(text)
+    except WbcError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
 def _action_or_interface(text: str) -> ActionType:
-    """An argparse type: a served action's name (``high_five``) or an interface (``HighFive``)."""
+    """An argparse type: a served action's name (``high_five``) or an interface, by its full
+    name as ``ros2 interface show`` takes it (``go2_interfaces/action/HighFive``) or shorter
+    (``go2_interfaces/HighFive``, ``HighFive``)."""
     name = text.removeprefix("/")
     if name in GO2_ACTIONS:
         return GO2_ACTIONS[name]
-    if name in ACTION_TYPES:
-        return ACTION_TYPES[name]
+    try:
+        return action_type_named(text)
+    except WbcError:
+        pass
+    interfaces = ", ".join(sorted(t.type_name for t in ACTION_TYPES.values()))
     raise argparse.ArgumentTypeError(
         f"no action or interface named {text!r}; actions: {', '.join(sorted(GO2_ACTIONS))}; "
-        f"interfaces: {', '.join(sorted(ACTION_TYPES))}")
+        f"interfaces: {interfaces} (or the last part alone, e.g. HighFive)")
 
 
 def _goal_mapping(text: str) -> dict[Any, Any]:
     """An argparse type: the goal as a YAML/JSON mapping (an empty text is ``{}``)."""
     example = '"{name: value, ...}" with the goal\'s fields (go2-wbc interface ACTION)'
+    if "{" not in text and ":" not in text:
+        try:  # the type given as the last argument: the goal itself is missing
+            type_name = action_type_named(text.strip()).type_name
+        except WbcError:
+            pass
+        else:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is an action type ({type_name}), not a goal; expected ACTION [TYPE] "
+                f"GOAL together, before any option, the goal a YAML mapping {example}")
     try:
         data = yaml.safe_load(text)
     except yaml.MarkedYAMLError as err:
@@ -144,6 +172,10 @@ def add_action_commands(sub: Any) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     send.add_argument("action", type=_served_action, metavar="ACTION",
                       help="the action's name, as 'go2-wbc actions' lists it (e.g. high_five)")
+    send.add_argument("type", type=_action_type, nargs="?", metavar="TYPE",
+                      help="the action's type, as 'go2-wbc actions' lists it (e.g. "
+                           "go2_interfaces/action/HighFive, or go2_interfaces/HighFive, "
+                           "HighFive); optional: when given, it must be the action's")
     send.add_argument("goal", type=_goal_mapping, metavar="GOAL",
                       help='the goal\'s fields as YAML, e.g. "{target_height: 0.4, '
                            'hold_seconds: 2}"')
@@ -168,7 +200,9 @@ def add_action_commands(sub: Any) -> None:
         description="Print the .action definition of an action: its goal, result and "
                     "feedback fields.")
     interface.add_argument("interface", type=_action_or_interface, metavar="ACTION",
-                           help="an action name (high_five) or an interface name (HighFive)")
+                           help="an action name (high_five) or an interface name "
+                                "(go2_interfaces/action/HighFive, go2_interfaces/HighFive or "
+                                "HighFive)")
     interface.set_defaults(run=_show_interface, parser=interface)
 
 
@@ -178,7 +212,7 @@ def add_action_commands(sub: Any) -> None:
 def _list_actions(args: argparse.Namespace, stream: IO[str] | None = None) -> int:
     stream = stream or sys.stdout
     for name in sorted(GO2_ACTIONS):
-        stream.write(f"{name} [{GO2_ACTIONS[name].name}]\n")
+        stream.write(f"{name} [{GO2_ACTIONS[name].type_name}]\n")
     return EXIT_SUCCEEDED
 
 
@@ -189,6 +223,10 @@ def _show_interface(args: argparse.Namespace, stream: IO[str] | None = None) -> 
 
 def _send_goal(args: argparse.Namespace) -> int:
     name, action_type = args.action
+    if args.type is not None and args.type is not action_type:
+        args.parser.error(
+            f"TYPE: the '{name}' action is of type {action_type.type_name}; received "
+            f"{args.type.type_name}")
     try:
         goal = set_message_fields(action_type.Goal(), args.goal).validated_copy()
     except WbcError as err:

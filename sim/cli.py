@@ -65,9 +65,10 @@ EXIT_CODES_HELP = """\
 exit status:
     0  the goal SUCCEEDED
     1  the goal ended CANCELED or ABORTED (or did not end in time)
-    2  bad arguments (the message names the option and what is valid)
+    2  bad arguments, an action that is not served included (the message names the
+       argument and what is valid)
     3  the action server rejected the goal (the reason is printed)
-    4  cannot run here (action not served, no offscreen rendering for --video)
+    4  cannot run here (no offscreen rendering for --video)
   130  interrupted: Ctrl-C cancels the goal and waits for the robot to unwind
 """
 
@@ -101,6 +102,10 @@ trajectory file (YAML, or JSON with a .json suffix; same keys):
   goal_time_tolerance: 0.5             # optional [s] after the last point
 A file that cannot be read or does not have this shape is a usage error (exit 2);
 joint names, lengths and times are judged by the action server (a rejection is exit 3).
+The progress is the trajectory time reached: 'starting' while the leg is released (the body
+shifts, the foot unloads), 'following', then 'settling' past the last point's time. The goal
+ends with the foot up, the leg holding where it stopped, the robot on three feet; a Stand
+goal puts the foot down.
 
 """
 
@@ -670,12 +675,18 @@ def _feedback_view(feedback: Any, trajectory_end_s: float | None
     """``(phase, progress 0..1, largest joint error [rad] or None)`` of a feedback message."""
     if hasattr(feedback, "phase"):
         return feedback.phase, float(feedback.progress), None
-    # FollowJointTrajectory feedback has no phase field; this server puts it in the
-    # header's frame_id. Progress is the trajectory time reached.
+    # FollowJointTrajectory feedback has no phase field: the phase shown and the progress
+    # are read from the trajectory time reached, desired.time_from_start.
     desired_s = feedback.desired.time_from_start.to_seconds()
     progress = min(1.0, desired_s / trajectory_end_s) if trajectory_end_s else 1.0
     error = max((abs(e) for e in feedback.error.positions), default=0.0)
-    return feedback.header.frame_id or "following", progress, error
+    if desired_s <= 0.0:
+        phase = "starting"  # the leg is being released, or the start stamp is ahead
+    elif trajectory_end_s is None or desired_s <= trajectory_end_s:
+        phase = "following"
+    else:
+        phase = "settling"  # past the last point's time: the goal tolerance is checked
+    return phase, progress, error
 
 
 class FeedbackPrinter:

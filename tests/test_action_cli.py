@@ -12,7 +12,7 @@ import yaml
 from actions.action_type import ACTION_TYPES, HIGH_FIVE
 from actions.go2_actions import GO2_ACTIONS
 from actions.high_five_behaviour import INVALID_TARGET_HEIGHT
-from sim.cli import EXIT_REJECTED, EXIT_SUCCEEDED, EXIT_USAGE, main
+from sim.cli import EXIT_CODES_HELP, EXIT_REJECTED, EXIT_SUCCEEDED, EXIT_USAGE, main
 from sim.control_loop import ControlLoop
 
 HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading",
@@ -84,6 +84,31 @@ def test_send_goal_to_another_action_without_feedback():
     assert out.endswith("Goal finished with status: SUCCEEDED\n")
 
 
+@pytest.mark.parametrize("type_name", ["go2_interfaces/action/Stand", "go2_interfaces/Stand",
+                                       "Stand"])
+def test_send_goal_takes_the_action_type_as_ros2_action_send_goal_does(type_name):
+    code, out = run(["send-goal", "/stand", type_name, "{duration_s: 0.5}"])
+    assert code == EXIT_SUCCEEDED, out
+    assert section(out, "Sending goal") == {"duration_s": 0.5}
+    assert out.endswith("Goal finished with status: SUCCEEDED\n")
+
+
+def test_a_follow_joint_trajectory_goal_with_its_type_and_feedback_without_a_phase():
+    goal = ("{trajectory: {joint_names: [FR_calf_joint], points: [{positions: [-1.9], "
+            "time_from_start: {sec: 1}}]}}")
+    code, out = run(["send-goal", "/follow_joint_trajectory",
+                     "control_msgs/action/FollowJointTrajectory", goal, "--feedback"])
+    assert code == EXIT_SUCCEEDED, out
+    feedback = [yaml.safe_load(line.split("]: ", 1)[1]) for line in out.splitlines()
+                if line.startswith("Feedback [")]
+    assert {message["header"]["frame_id"] for message in feedback} == {""}
+    reached = [message["desired"]["time_from_start"] for message in feedback]
+    assert reached[0] == {"sec": 0, "nanosec": 0} and reached[-1]["sec"] == 1
+    assert section(out, "Result") == {"error_code": 0, "error_string": (
+        "goal reached: the FR leg holds the last point, in swing: the FR foot stays up and the "
+        "robot stands on three feet; a Stand goal puts the foot down")}
+
+
 def test_a_rejected_goal_prints_the_code_and_reason_and_exits_3():
     code, out = run(["send-goal", "high_five", "{target_height: 0.9, hold_seconds: 2}"])
     assert code == EXIT_REJECTED
@@ -117,6 +142,20 @@ def test_a_rejected_goal_prints_the_code_and_reason_and_exits_3():
     (["high5", "{}"],
      ("ACTION: no action named 'high5'; served actions: follow_joint_trajectory, high_five, "
       "sit, stand")),
+    (["/high_five", "go2_interfaces/action/Stand", "{target_height: 0.4}"],
+     ("TYPE: the 'high_five' action is of type go2_interfaces/action/HighFive; received "
+      "go2_interfaces/action/Stand")),
+    (["follow_joint_trajectory", "go2_interfaces/action/FollowJointTrajectory", "{}"],
+     ("TYPE: unknown action type 'go2_interfaces/action/FollowJointTrajectory' "
+      "(FollowJointTrajectory is control_msgs/action/FollowJointTrajectory); valid action "
+      "types: control_msgs/action/FollowJointTrajectory, go2_interfaces/action/HighFive, "
+      "go2_interfaces/action/Sit, go2_interfaces/action/Stand (or the last part alone, e.g. "
+      "Stand)")),
+    (["high_five", "go2_interfaces/action/HighFive"],
+     ("GOAL: 'go2_interfaces/action/HighFive' is an action type "
+      "(go2_interfaces/action/HighFive), not a goal; expected ACTION [TYPE] GOAL together, "
+      "before any option, the goal a YAML mapping \"{name: value, ...}\" with the goal's "
+      "fields (go2-wbc interface ACTION)")),
     (["stand", "{duration_s: 1}", "--timeout", "0"],
      "--timeout: expected a number of seconds > 0, received '0'"),
 ])
@@ -128,14 +167,17 @@ def test_bad_input_exits_2_with_one_line_naming_the_field(argv, message, capsys)
 def test_actions_lists_what_the_simulated_go2_serves_with_types():
     code, out = run(["actions"])
     assert code == EXIT_SUCCEEDED
-    assert out == ("follow_joint_trajectory [FollowJointTrajectory]\nhigh_five [HighFive]\n"
-                   "sit [Sit]\nstand [Stand]\n")
+    assert out == ("follow_joint_trajectory [control_msgs/action/FollowJointTrajectory]\n"
+                   "high_five [go2_interfaces/action/HighFive]\n"
+                   "sit [go2_interfaces/action/Sit]\n"
+                   "stand [go2_interfaces/action/Stand]\n")
     runner = ControlLoop.simulated().runner  # the list is the served one
     assert {name: runner.server(name).action_type for name in runner.server_names} == (
         GO2_ACTIONS)
 
 
-@pytest.mark.parametrize("name", ["high_five", "/high_five", "HighFive"])
+@pytest.mark.parametrize("name", ["high_five", "/high_five", "HighFive", "go2_interfaces/HighFive",
+                                  "go2_interfaces/action/HighFive"])
 def test_interface_prints_the_action_definition(name):
     code, out = run(["interface", name])
     assert code == EXIT_SUCCEEDED
@@ -145,9 +187,39 @@ def test_interface_prints_the_action_definition(name):
 
 def test_interface_of_every_type_and_an_unknown_name(capsys):
     for action_type in ACTION_TYPES.values():
-        assert run(["interface", action_type.name])[1] == action_type.interface_path.read_text()
+        for name in (action_type.name, action_type.type_name):  # as ros2 interface show
+            assert run(["interface", name])[1] == action_type.interface_path.read_text()
     line = usage_error(["interface", "foo"], capsys)
     assert line == (
         "go2-wbc interface: error: ACTION: no action or interface named 'foo'; actions: "
-        "follow_joint_trajectory, high_five, sit, stand; interfaces: FollowJointTrajectory, "
-        "HighFive, Sit, Stand (see 'go2-wbc interface --help')")
+        "follow_joint_trajectory, high_five, sit, stand; interfaces: "
+        "control_msgs/action/FollowJointTrajectory, go2_interfaces/action/HighFive, "
+        "go2_interfaces/action/Sit, go2_interfaces/action/Stand (or the last part alone, e.g. "
+        "HighFive) (see 'go2-wbc interface --help')")
+
+
+def exit_code_table() -> dict[int, str]:
+    """The help's exit status table: code -> its text (continuation lines joined)."""
+    table: dict[int, str] = {}
+    code = None
+    for line in EXIT_CODES_HELP.splitlines()[1:]:
+        first, _, rest = line.strip().partition("  ")
+        if first.isdigit():
+            code = int(first)
+            table[code] = rest.strip()
+        elif code is not None:
+            table[code] += " " + line.strip()
+    return table
+
+
+def test_the_help_says_the_exit_code_an_action_that_is_not_served_gives(capsys):
+    table = exit_code_table()
+    assert sorted(table) == [0, 1, 2, 3, 4, 130]
+    assert "an action that is not served" in table[2]
+    assert "action" not in table[4]  # it said 4 here, and the code gave 2
+    for argv in (["send-goal", "nonexistent", "{}"], ["interface", "nonexistent"]):
+        usage_error(argv, capsys)  # exit 2, one line
+    with pytest.raises(SystemExit) as exc:
+        main(["send-goal", "--help"])
+    assert exc.value.code == 0
+    assert EXIT_CODES_HELP in capsys.readouterr().out

@@ -55,6 +55,16 @@ def joints(loop: ControlLoop) -> np.ndarray:
     return loop.true_state()[0][7:]
 
 
+def trajectory_times(feedback) -> np.ndarray:
+    """``desired.time_from_start`` [s] of each feedback message: the trajectory time reached."""
+    return np.array([m.desired.time_from_start.to_seconds() for m in feedback])
+
+
+#: What a goal that ends with the leg free says of the robot.
+LEFT_IN_SWING = ("in swing: the FR foot stays up and the robot stands on three feet; a Stand "
+                 "goal puts the foot down")
+
+
 def assert_standing(loop: ControlLoop, stance: list[str]) -> None:
     """Spin a little, then: upright at standing height on the given feet, no fallback."""
     loop.spin_for(0.05)
@@ -267,16 +277,24 @@ def test_tutorial_one_point_for_a_leg_reached_in_3_s_with_send_goal_and_wait():
     wrapped = loop.client(FOLLOW_JOINT_TRAJECTORY_ACTION).send_goal_and_wait(
         goal(FR_JOINTS, point(target, Duration(sec=3))), feedback_callback=feedback.append)
     assert wrapped.status == GoalStatus.SUCCEEDED
-    assert wrapped.result == R(error_code=R.SUCCESSFUL, error_string="")
+    assert wrapped.result == R(error_code=R.SUCCESSFUL, error_string=(
+        f"goal reached: the FR leg holds the last point, {LEFT_IN_SWING}"))
     assert np.all(np.abs(joints(loop)[3:6] - target) < DEFAULT_GOAL_TOLERANCE_RAD)
     messages = [m.feedback for m in feedback]
-    phases = [m.header.frame_id for m in messages]
-    assert list(dict.fromkeys(phases)) == ["shifting", "unloading", "following", "succeeded"]
+    assert {m.header.frame_id for m in messages} == {""}  # as control_msgs: no phase there
+    assert all(m.joint_names == FR_JOINTS for m in messages)
     stamps = np.array([m.header.stamp.to_seconds() for m in messages])
     assert np.diff(stamps).max() <= 0.02 + 1e-6  # 50 Hz
-    following = [m for m in messages if m.header.frame_id == "following"]
-    assert 1.3 < following[0].header.stamp.to_seconds() < 1.5  # shift 1.0 s + unload 0.4 s
+    times = trajectory_times(messages)
+    assert np.all(np.diff(times) >= 0.0)  # the trajectory time never goes back
+    # 0 while the leg is released (shift 1.0 s + unload 0.4 s), then the clock's time.
+    first = int(np.argmax(times > 0.0))
+    assert 1.3 < stamps[first] - times[first] < 1.5
+    np.testing.assert_allclose(stamps[first:] - times[first:], stamps[first] - times[first],
+                               atol=1e-6)
+    following = [m for m, t in zip(messages, times) if 0.0 < t <= 3.0]
     assert following[-1].desired.time_from_start.to_seconds() == pytest.approx(3.0, abs=0.021)
+    assert times[-1] > 3.0  # success is judged after the last point's time
     tracking = max(np.abs(m.error.positions).max() for m in following)
     assert tracking < 0.01
     q, _ = loop.true_state()
@@ -308,7 +326,8 @@ def test_tutorial_one_joint_async_with_feedback_and_result_callbacks():
     assert results[0].status == GoalStatus.SUCCEEDED
     assert results[0].result.error_code == R.SUCCESSFUL
     assert abs(joints(loop)[FR_CALF] + 1.9) < DEFAULT_GOAL_TOLERANCE_RAD
-    last = [m.feedback for m in feedback if m.feedback.header.frame_id == "following"][-1]
+    last = [m.feedback for m in feedback
+            if 0.0 < m.feedback.desired.time_from_start.to_seconds() <= 1.0][-1]
     assert last.joint_names == ["FR_calf_joint"]
     assert last.desired.positions[0] == pytest.approx(-1.9, abs=1e-3)
     assert last.error.positions[0] == pytest.approx(
@@ -332,7 +351,8 @@ def test_a_later_goal_for_the_swinging_leg_starts_at_once_and_stand_puts_the_foo
     again = client.send_goal_and_wait(goal(["FR_thigh_joint"], point([0.5], 0.5)),
                                       feedback_callback=feedback.append)
     assert again.result.error_code == R.SUCCESSFUL
-    assert feedback[0].feedback.header.frame_id == "following"  # no release this time
+    times = trajectory_times([m.feedback for m in feedback])
+    assert times[0] == 0.0 and 0.0 < times[1] <= 0.021  # no release this time
     stand = loop.client(STAND_ACTION).send_goal_and_wait(StandGoal(duration_s=1.0))
     assert stand.status == GoalStatus.SUCCEEDED
     loop.spin_for(0.2)
@@ -352,7 +372,7 @@ def test_a_fast_motion_with_a_tight_path_tolerance_aborts_and_holds():
     assert "s of the trajectory: FR_calf_joint position error " in message
     assert message.endswith(
         "rad exceeds its tolerance 0.001 rad (path_tolerance; 0 = the default 0.1 rad, -1 = no "
-        "limit); the FR leg holds where it was, in swing")
+        f"limit); the FR leg holds where it was, {LEFT_IN_SWING}")
     stopped = joints(loop)[FR_CALF]
     loop.spin_for(0.5)
     assert abs(joints(loop)[FR_CALF] - stopped) < 0.02
@@ -373,7 +393,7 @@ def test_a_goal_tolerance_not_met_in_the_goal_time_aborts():
     assert message.startswith("goal tolerance violated 0.02")
     assert "s after the last point's time (goal_time_tolerance 0.02 s): FR_calf_joint " in message
     assert "exceeds its tolerance 1e-06 rad (goal_tolerance; 0 = the default 0.02 rad" in message
-    assert "settling" in {m.feedback.header.frame_id for m in feedback}
+    assert trajectory_times([m.feedback for m in feedback]).max() > 1.0  # past the last point
     assert_standing(loop, ["FL", "RL", "RR"])
 
 
@@ -398,10 +418,14 @@ def test_cancel_mid_trajectory_holds_the_leg_and_ends_canceled():
     assert wrapped.result.error_code == R.SUCCESSFUL
     assert wrapped.result.error_string.startswith(
         "canceled (canceled by client request) at t=0.8")
-    phases = list(dict.fromkeys(m.feedback.header.frame_id for m in feedback))
-    assert phases == ["shifting", "unloading", "waiting", "following", "canceled"]
-    following = [m.feedback for m in feedback if m.feedback.header.frame_id == "following"]
-    assert following[0].header.stamp.to_seconds() == pytest.approx(1.6, abs=0.002)
+    assert wrapped.result.error_string.endswith(
+        f"of the trajectory: the FR leg holds where it was, {LEFT_IN_SWING}")
+    times = trajectory_times([m.feedback for m in feedback])
+    stamps = np.array([m.feedback.header.stamp.to_seconds() for m in feedback])
+    # 0 while the leg is released and until the stamp, then the clock's time from the stamp.
+    first = int(np.argmax(times > 0.0))
+    assert 1.6 - 1e-6 < stamps[first] < 1.6 + 0.021
+    np.testing.assert_allclose(stamps[first:] - times[first:], 1.6, atol=0.002)
     loop.spin_for(0.5)
     assert abs(joints(loop)[FR_CALF] - at_cancel) < 0.05  # stopped near where it was
     assert abs(loop.true_state()[1][6 + FR_CALF]) < 0.05
