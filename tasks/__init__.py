@@ -1,5 +1,9 @@
 """Acceleration-level tasks and QP constraints for whole-body control, with compiled kernels."""
 
+# The tasks' modules use wbc.errors and wbc.validation, and wbc's controller imports the
+# tasks: wbc is imported first, while no module here is half-imported, so that the
+# controller's imports of the tasks' modules complete.
+import wbc  # noqa: F401
 from tasks.base_orientation_task import BaseOrientationTask
 from tasks.com_task import ComTask
 from tasks.constraint import Constraint, ConstraintBlock

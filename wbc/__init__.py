@@ -1,14 +1,19 @@
 """Whole-body control of the Unitree GO2: description, QP controller, solver backends, state
 estimation.
 
-``from wbc import WholeBodyController`` is the main entry point. The controller and what
-depends on the tasks are imported on first use, so that ``tasks`` may use this package's
-leaf modules (``wbc.errors``, ``wbc.validation``) without an import cycle.
+``from wbc import WholeBodyController`` is the main entry point. Every public name is
+imported here explicitly, so type checkers and editors see its type.
+
+``tasks`` uses this package's leaf modules (``wbc.errors``, ``wbc.validation``) and the
+controller imports ``tasks``: ``tasks`` imports this package before any module of its own,
+and the controller imports the tasks' modules rather than the package, so either package may
+be imported first.
 """
 
-from importlib import import_module
-from typing import Any
-
+from wbc.backends import available_backends
+from wbc.balance_controller import BalanceController
+from wbc.control_output import ControlOutput, ControlStatus
+from wbc.controller_config import ControllerConfig
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import (
     ConfigurationError,
@@ -18,46 +23,60 @@ from wbc.errors import (
     UnknownNameError,
     WbcError,
 )
+from wbc.estimators import make_estimator
+from wbc.invariant_ekf import InvariantEkf, InvariantEkfConfig
 from wbc.joint_map import JointMap
-
-_LAZY = {
-    "WholeBodyController": "wbc.whole_body_controller",
-    "ControllerConfig": "wbc.controller_config",
-    "ControlOutput": "wbc.control_output",
-    "ControlStatus": "wbc.control_output",
-    "LegLift": "wbc.leg_lift",
-    "LegLiftTiming": "wbc.leg_lift",
-    "LiftPhase": "wbc.leg_lift",
-    "BalanceController": "wbc.balance_controller",
-    "JointPdController": "wbc.joint_pd_controller",
-    "JointReference": "wbc.joint_reference",
-    "MotorCommand": "wbc.motor_command",
-    "SdkLowState": "wbc.unitree_sdk",
-    "SdkMotorCommand": "wbc.unitree_sdk",
-    "PlacoController": "wbc.placo_controller",
-    "ProblemBuilder": "wbc.problem_builder",
-    "Regularization": "wbc.problem_builder",
-    "SupportPolygon": "wbc.support_polygon",
-    "available_backends": "wbc.backends",
-    "SensorRecord": "wbc.sensor_record",
-    "StateEstimator": "wbc.state_estimator",
-    "StateEstimate": "wbc.state_estimator",
-    "EstimatorConfig": "wbc.state_estimator",
-    "InvariantEkf": "wbc.invariant_ekf",
-    "InvariantEkfConfig": "wbc.invariant_ekf",
-    "make_estimator": "wbc.estimators",
-    "LegKinematics": "wbc.leg_kinematics",
-    "sensor_record_from_message": "wbc.unitree_sdk",
-}
+from wbc.joint_pd_controller import JointPdController
+from wbc.joint_reference import JointReference
+from wbc.leg_kinematics import LegKinematics
+from wbc.leg_lift import LegLift, LegLiftTiming, LiftPhase
+from wbc.motor_command import MotorCommand
+from wbc.placo_controller import PlacoController
+from wbc.problem_builder import ProblemBuilder, Regularization
+from wbc.sensor_record import SensorRecord
+from wbc.state_estimator import EstimatorConfig, StateEstimate, StateEstimator
+from wbc.support_polygon import SupportPolygon
+from wbc.unitree_sdk import SdkLowState, SdkMotorCommand, sensor_record_from_message
+from wbc.whole_body_controller import WholeBodyController
 
 __all__ = [
-    "FOOT_FRAMES", "FOOT_RADIUS_M", "JOINT_NAMES", "LEGS", "ConfigurationError",
-    "DescriptionNotFoundError", "Go2Description", "JointMap", "NonFiniteError",
-    "ReachabilityError", "UnknownNameError", "WbcError", *_LAZY,
+    "FOOT_FRAMES",
+    "FOOT_RADIUS_M",
+    "JOINT_NAMES",
+    "LEGS",
+    "BalanceController",
+    "ConfigurationError",
+    "ControlOutput",
+    "ControlStatus",
+    "ControllerConfig",
+    "DescriptionNotFoundError",
+    "EstimatorConfig",
+    "Go2Description",
+    "InvariantEkf",
+    "InvariantEkfConfig",
+    "JointMap",
+    "JointPdController",
+    "JointReference",
+    "LegKinematics",
+    "LegLift",
+    "LegLiftTiming",
+    "LiftPhase",
+    "MotorCommand",
+    "NonFiniteError",
+    "PlacoController",
+    "ProblemBuilder",
+    "ReachabilityError",
+    "Regularization",
+    "SdkLowState",
+    "SdkMotorCommand",
+    "SensorRecord",
+    "StateEstimate",
+    "StateEstimator",
+    "SupportPolygon",
+    "UnknownNameError",
+    "WbcError",
+    "WholeBodyController",
+    "available_backends",
+    "make_estimator",
+    "sensor_record_from_message",
 ]
-
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'wbc' has no attribute {name!r}")
