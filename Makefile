@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: install demo test bench bench-full lint
+.PHONY: install demo test bench bench-full docs lint
 
 $(STAMP): pyproject.toml scripts/setup.sh
 	PYTHON=$(PYTHON) bash scripts/setup.sh
@@ -24,6 +24,10 @@ bench: $(STAMP)
 
 bench-full: $(STAMP)
 	$(BIN)/python -m benchmarks.qp_timing
+
+# The README's and docs/ pictures and the numbers they quote (docs/pictures.json).
+docs: $(STAMP)
+	$(BIN)/python scripts/docs_media.py
 
 lint: $(STAMP)
 	$(BIN)/python -m ruff check .

@@ -472,9 +472,14 @@ def _run_options() -> argparse.ArgumentParser:
     run.add_argument("--realtime", action="store_true",
                      help="pace the simulation to the wall clock (default: as fast as possible)")
     run.add_argument("--viewer", action="store_true",
-                     help="open the MuJoCo viewer (implies --realtime); without a display "
-                          "($DISPLAY or $WAYLAND_DISPLAY) it says so and runs headless "
+                     help="open the MuJoCo viewer (implies --realtime); it stays open on "
+                          "the final state until you close it (see --viewer-exit); without a "
+                          "display ($DISPLAY or $WAYLAND_DISPLAY) it says so and runs headless "
                           "(default: headless)")
+    run.add_argument("--viewer-exit", action="store_true",
+                     help="with --viewer: close the window when the goal ends (default: the "
+                          "window stays open on the final state, the simulation paused, "
+                          "until you close it)")
     run.add_argument("--start-pose", choices=("standing", "lying"), default=None,
                      help="pose the robot starts in (default: lying for 'stand', "
                           "standing otherwise)")
@@ -605,6 +610,8 @@ def _check_combinations(args: argparse.Namespace) -> None:
             args.parser.error(f"--{option.replace('_', '-')}: only used with --{needs}")
     if args.overlay is not None and args.video is None and not args.viewer:
         args.parser.error("--overlay: only used with --video or --viewer")
+    if args.viewer_exit and not args.viewer:
+        args.parser.error("--viewer-exit: only used with --viewer")
     args.overlay = DEFAULT_OVERLAYS if args.overlay is None else args.overlay
     args.fps = args.fps or 30
     args.video_size = args.video_size or (640, 480)
@@ -826,14 +833,21 @@ class GoalRun:
                   f"(served: {', '.join(loop.runner.server_names)})", file=sys.stderr)
             return EXIT_UNAVAILABLE
         closers: list[Callable[[], None]] = []
+        self.view: ViewerHook | None = None
+        self.pacer: Pacer | None = None
         try:
-            code = self._attach_hooks(loop, viewer, closers)
-            if code is None:
-                code = self._spin(loop)
+            try:
+                code = self._attach_hooks(loop, viewer, closers)
+                if code is None:
+                    code = self._spin(loop)
+            finally:
+                for close in closers:
+                    close()
+            self._write_outputs()
+            self._keep_viewer_open(loop, code)
         finally:
-            for close in closers:
-                close()
-        self._write_outputs()
+            if self.view is not None:  # after the outputs: the window outlives the run
+                self.view.close()
         return code
 
     def _attach_hooks(self, loop: ControlLoop, viewer: bool,
@@ -863,16 +877,43 @@ class GoalRun:
             self.video = video
         if viewer:
             try:
-                view = ViewerHook(loop.sim, overlay=overlay)
+                view = ViewerHook(loop.sim, overlay=overlay, on_closed=self._viewer_closed)
             except Exception as err:  # noqa: BLE001 - GLFW and X fail in assorted types
                 print(f"go2-wbc: --viewer: cannot open a window ({' '.join(str(err).split())}); "
                       "running headless", file=sys.stderr)
             else:
-                closers.append(view.close)
+                self.view = view  # closed by _run, after the outputs
                 loop.hooks.append(_Timed(view, self.overhead_s))
         if args.realtime or viewer:
-            loop.hooks.append(_Timed(Pacer(loop.sim), self.overhead_s))
+            self.pacer = Pacer(loop.sim)
+            loop.hooks.append(_Timed(self.pacer, self.overhead_s))
         return None
+
+    def _viewer_closed(self) -> None:
+        """The viewer's window went mid-run: say so; the run goes on, unpaced unless
+        --realtime asked for the wall clock's pace."""
+        view = self.view
+        if view is None:
+            return
+        unpaced = False
+        if self.pacer is not None and not self.args.realtime:
+            self.pacer.active, unpaced = False, True
+        how = ("was closed" if view.error is None else
+               f"failed ({type(view.error).__name__}: {' '.join(str(view.error).split())})")
+        self.say(f"[{view.closed_at_s:7.3f} s] viewer: the window {how}; the run goes on "
+                 f"headless{', as fast as possible' if unpaced else ''}")
+
+    def _keep_viewer_open(self, loop: ControlLoop, code: int) -> None:
+        """--viewer: the window stays on the final state, paused, until its user closes it
+        (not with --viewer-exit, after Ctrl-C, or when it has gone)."""
+        view = self.view
+        if (view is None or self.args.viewer_exit or code == EXIT_INTERRUPTED
+                or not view.is_open):
+            return
+        self.say(f"[{loop.context.now_s:7.3f} s] viewer: paused on the final state; close the "
+                 "window to exit (--viewer-exit closes it at the end)")
+        with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C closes it too
+            view.hold(loop)
 
     # -- the action client -----------------------------------------------------------------
 

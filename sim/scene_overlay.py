@@ -36,6 +36,16 @@ MEASURED_RGBA = (0.10, 0.35, 1.00, 1.0)
 TARGET_RGBA = (0.95, 0.10, 0.85, 0.5)
 TRACE_RGBA = (0.95, 0.10, 0.85, 1.0)
 
+#: The legend: per overlay, each colour it draws with, its name and what it shows.
+LEGEND: dict[str, tuple[tuple[str, tuple[float, ...], str], ...]] = {
+    "com": (("red", COM_RGBA, "centre of mass and its ground point"),),
+    "polygon": (("green", POLYGON_RGBA, "support polygon of the loaded feet"),
+                ("yellow", MARGIN_RGBA, "support margin: the CoM stays inside")),
+    "forces": (("orange", FORCE_RGBA, "commanded contact forces"),),
+    "measured": (("blue", MEASURED_RGBA, "measured contact forces"),),
+    "target": (("magenta", TRACE_RGBA, "raised foot's target and its trace"),),
+}
+
 #: Arrow length per newton [m/N]: a GO2 standing on four feet (about 38 N each) gets 15 cm
 #: arrows, on three about 20 cm.
 FORCE_SCALE_M_PER_N = 0.004
@@ -100,7 +110,8 @@ class SceneOverlay:
 
     Use it with the viewer (``handle.user_scn``) or an offscreen renderer (``renderer.scene``
     after ``update_scene``); :class:`sim.viewer.ViewerHook` and
-    :class:`sim.video_recorder.VideoRecorder` take one.
+    :class:`sim.video_recorder.VideoRecorder` take one, and show its :meth:`legend` (what
+    each colour is, for the overlays that are on) beside the robot.
 
     Example:
         >>> overlay = SceneOverlay(("com", "polygon"))
@@ -242,6 +253,25 @@ class SceneOverlay:
         self._swinging = set(swing)
 
     # ------------------------------------------------------------------ text
+
+    def legend(self) -> list[tuple[str, tuple[float, ...], str]]:
+        """What each colour drawn shows: ``(colour name, RGBA, text)`` per colour, for the
+        overlays that are on, in drawing order (:data:`LEGEND`); the force arrows' text
+        gives their scale."""
+        entries = []
+        for name in OVERLAY_NAMES:
+            if name not in self.overlays:
+                continue
+            for colour, rgba, text in LEGEND[name]:
+                if name in ("forces", "measured"):  # no commas: the viewer's font lacks them
+                    text += f" ({self.force_scale_m_per_n * 1e3:g} mm/N)"
+                entries.append((colour, tuple(rgba), text))
+        return entries
+
+    def legend_lines(self) -> tuple[str, str]:
+        """:meth:`legend` as the viewer's two text columns: colour names and what they show."""
+        entries = self.legend()
+        return ("\n".join(e[0] for e in entries), "\n".join(e[2] for e in entries))
 
     def caption(self, loop: ControlLoop) -> str:
         """One line for a video frame: the goal's phase and progress, and the time."""

@@ -18,15 +18,23 @@ if TYPE_CHECKING:
     from wbc.control_output import ControlOutput
 
 
+#: Height [px] of the legend's text in a 480 px tall frame; it scales with the frame.
+LEGEND_FONT_PX = 13
+#: Frames less tall than this [px] get no legend: its text would be too small to read.
+LEGEND_MIN_HEIGHT_PX = 240
+
+
 class VideoRecorder:
     """Renders a camera tracking the base at ``fps`` frames per simulated second to an MP4.
 
     With an ``overlay`` (:class:`sim.scene_overlay.SceneOverlay`), each frame also shows
-    its geoms and, at the top left, its caption (the goal's phase and progress, the time).
+    its geoms, at the top left its caption (the goal's phase and progress, the time) and at
+    the bottom left its legend (what each colour is, for the overlays that are on; not in
+    frames less than :data:`LEGEND_MIN_HEIGHT_PX` tall, or with ``legend=False``).
     """
 
     def __init__(self, sim: Go2Simulator, path: Path, *, fps: int, size: tuple[int, int],
-                 overlay: SceneOverlay | None = None):
+                 overlay: SceneOverlay | None = None, legend: bool = True):
         import imageio
         import mujoco
 
@@ -51,6 +59,10 @@ class VideoRecorder:
         follow_base(self.camera, sim.model)
         self.sim = sim
         self.overlay = overlay
+        entries = overlay.legend() if overlay is not None and legend else []
+        #: Stamps the legend into a frame (None: no legend).
+        self.legend = (LegendStamp(entries, frame_height=height)
+                       if entries and height >= LEGEND_MIN_HEIGHT_PX else None)
         self.period_s = 1.0 / fps
         self.next_s = sim.time_s
         self.frames = 0
@@ -70,12 +82,79 @@ class VideoRecorder:
         if self.overlay is not None:
             self.overlay.draw(self.renderer.scene, loop)
             self.overlay.draw_caption(self.renderer.scene, loop, aspect=self.aspect)
-        return self.renderer.render()
+        frame = self.renderer.render()
+        if self.legend is not None and self.overlay is not None:
+            self.legend.stamp(frame)
+        return frame
 
     def close(self) -> None:
         """Finish the file and free the GL context."""
         self.writer.close()
         self.renderer.close()
+
+
+class LegendStamp:
+    """A legend, drawn once (coloured swatches and their labels on a translucent dark box),
+    blended into each frame's bottom left corner.
+
+    Blending the box into a 640x480 frame costs about 0.13 ms (on 2 cores), under 1 % of
+    rendering the frame on software GL; drawing it, once, 2 ms.
+
+    Args:
+        entries: ``(colour name, RGBA, text)`` per row
+            (:meth:`sim.scene_overlay.SceneOverlay.legend`).
+        frame_height: Height [px] of the frames: the text is :data:`LEGEND_FONT_PX` tall in
+            480, in proportion otherwise (at least 9 px).
+    """
+
+    def __init__(self, entries: list[tuple[str, tuple[float, ...], str]], *,
+                 frame_height: int):
+        from PIL import Image, ImageDraw, ImageFont
+
+        font_px = max(9, round(LEGEND_FONT_PX * frame_height / 480))
+        font = ImageFont.load_default(size=font_px)
+        pad, row, swatch = max(3, font_px // 2), round(1.4 * font_px), font_px
+        measure = ImageDraw.Draw(Image.new("RGBA", (1, 1)))
+        text_px = max(round(measure.textlength(text, font=font)) for _, _, text in entries)
+        width, height = 3 * pad + swatch + text_px, 2 * pad + row * len(entries) - (row - swatch)
+        image = Image.new("RGBA", (width, height), (0, 0, 0, 150))
+        draw = ImageDraw.Draw(image)
+        #: Where each row's swatch is centred in the box, (column, row) [px].
+        self.swatch_centres_px: list[tuple[int, int]] = []
+        for i, (_, rgba, text) in enumerate(entries):
+            top = pad + i * row
+            self.swatch_centres_px.append((pad + swatch // 2, top + swatch // 2))
+            colour = tuple(round(255 * c) for c in rgba[:3]) + (255,)
+            draw.rectangle((pad, top, pad + swatch - 1, top + swatch - 1), fill=colour)
+            draw.text((2 * pad + swatch, top + swatch / 2), text, font=font,
+                      fill=(255, 255, 255, 255), anchor="lm")
+        rgba_px = np.asarray(image, dtype=np.float32) / 255.0
+        alpha = rgba_px[..., 3:]
+        #: The box's colour times its opacity [0, 255], and what a frame keeps (1 - opacity).
+        self.paint = rgba_px[..., :3] * alpha * 255.0 + 0.5  # + 0.5: rounds, not truncates
+        self.keep = 1.0 - alpha
+        #: Gap [px] between the box and the frame's left and bottom edges.
+        self.margin_px = pad
+        self.entries = list(entries)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """The box's (width, height) [px]."""
+        return self.paint.shape[1], self.paint.shape[0]
+
+    def stamp(self, frame: np.ndarray) -> np.ndarray:
+        """Blend the legend into ``frame`` (height, width, 3; uint8) in place; returns it.
+
+        A frame too small for the box is left as it is.
+        """
+        width, height = self.size
+        bottom = frame.shape[0] - self.margin_px
+        left = self.margin_px
+        if bottom - height < 0 or left + width > frame.shape[1]:
+            return frame
+        region = frame[bottom - height:bottom, left:left + width]
+        region[...] = region * self.keep + self.paint
+        return frame
 
 
 def choose_offscreen_gl() -> None:

@@ -356,6 +356,7 @@ def test_trajectory_from_a_file_succeeds(tmp_path):
      ("--overlay: expected a comma-separated list of com, polygon, forces, measured, target, "
       "or all or none; received 'com,bogus'")),
     (["high-five", "--overlay", "com"], "--overlay: only used with --video or --viewer"),
+    (["high-five", "--viewer-exit"], "--viewer-exit: only used with --viewer"),
     (["high-five", "--report", "/no/such/dir/r.json"],
      "--report: directory '/no/such/dir' does not exist (for '/no/such/dir/r.json')"),
     (["trajectory", "/no/such/file.yaml"],

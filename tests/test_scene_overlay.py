@@ -28,7 +28,7 @@ from sim.scene_overlay import (
     SceneOverlay,
     parse_overlays,
 )
-from sim.video_recorder import VideoRecorder
+from sim.video_recorder import LEGEND_MIN_HEIGHT_PX, LegendStamp, VideoRecorder
 from sim.viewer import ViewerHook
 from wbc.description import FOOT_RADIUS_M, LEGS
 from wbc.errors import ConfigurationError
@@ -247,6 +247,84 @@ def test_every_overlay_is_in_the_rendered_frame(raising, frames):
     assert white.sum() > 100 and (plain[corner].min(axis=2) > 230).sum() < 10
 
 
+def test_the_legend_is_in_the_frame_s_bottom_left_corner(raising, frames):
+    # Each overlay colour's swatch, in its colour, with white text to its right; the frame
+    # without overlays has no legend.
+    _, overlay, *_ = raising
+    frame, plain, *_ = frames
+    stamp = LegendStamp(overlay.legend(), frame_height=HEIGHT)
+    width, height = stamp.size
+    top, left = HEIGHT - stamp.margin_px - height, stamp.margin_px
+    assert len(stamp.swatch_centres_px) == 6
+    for (column, row), (_, rgba, _) in zip(stamp.swatch_centres_px, overlay.legend(),
+                                           strict=True):
+        pixel = frame[top + row, left + column].astype(int)
+        np.testing.assert_allclose(pixel, np.round(255 * np.array(rgba[:3])), atol=2)
+        text = frame[top + row - 3:top + row + 4, left + column + 10:left + width]
+        assert (text.min(axis=2) > 200).sum() > 10
+    box = (slice(top, top + height), slice(left, left + width))
+    assert np.abs(frame[box].astype(int) - plain[box]).mean() > 20
+
+
+def _legend_frame(entries, *, height: int) -> tuple[np.ndarray, np.ndarray, LegendStamp]:
+    grey = np.full((height, height * 4 // 3, 3), 128, np.uint8)
+    stamp = LegendStamp(entries, frame_height=height)
+    return grey, stamp.stamp(grey.copy()), stamp
+
+
+def test_the_legend_lists_only_the_overlays_that_are_on():
+    assert SceneOverlay(()).legend() == []
+    assert SceneOverlay(("target", "com")).legend() == [
+        ("red", COM_RGBA, "centre of mass and its ground point"),
+        ("magenta", TRACE_RGBA, "raised foot's target and its trace")]
+    assert [e[0] for e in SceneOverlay(DEFAULT_OVERLAYS).legend()] == [
+        "red", "green", "yellow", "orange", "magenta"]
+    every = SceneOverlay(OVERLAY_NAMES, force_scale_m_per_n=0.002)
+    assert [e[2] for e in every.legend()][3:5] == ["commanded contact forces (2 mm/N)",
+                                                   "measured contact forces (2 mm/N)"]
+    assert every.legend_lines() == (
+        "red\ngreen\nyellow\norange\nblue\nmagenta",
+        ("centre of mass and its ground point\nsupport polygon of the loaded feet\n"
+         "support margin: the CoM stays inside\ncommanded contact forces (2 mm/N)\n"
+         "measured contact forces (2 mm/N)\nraised foot's target and its trace"))
+
+
+def test_the_legend_stamp_paints_its_box_and_nothing_else():
+    entries = SceneOverlay(OVERLAY_NAMES).legend()
+    before, after, stamp = _legend_frame(entries, height=480)
+    width, height = stamp.size
+    assert stamp.margin_px == 6 and 200 < width < 320 and 80 < height < 130
+    top, left = 480 - stamp.margin_px - height, stamp.margin_px
+    outside = np.ones(before.shape[:2], bool)
+    outside[top:top + height, left:left + width] = False
+    assert (after[outside] == before[outside]).all()
+    for (column, row), (_, rgba, _) in zip(stamp.swatch_centres_px, entries, strict=True):
+        assert tuple(after[top + row, left + column]) == tuple(
+            round(255 * c) for c in rgba[:3])
+    # The box darkens the grey behind it (black at 150/255), except under the text.
+    corner = after[top + 1, left + width - 2].astype(int)
+    assert tuple(corner) == (round(128 * 105 / 255),) * 3
+    # In proportion in a smaller frame; a frame too small for the box is left alone.
+    _, _, small = _legend_frame(entries, height=300)
+    assert small.size[1] < 0.75 * height
+    tiny = np.zeros((40, 60, 3), np.uint8)
+    assert not stamp.stamp(tiny).any()
+
+
+def test_videos_too_small_to_read_it_or_told_not_to_have_no_legend(raising):
+    loop, overlay, _, folder = raising
+    for size, legend, has_it in (((320, 240), True, True), ((160, 120), True, False),
+                                 ((320, 240), False, False)):
+        try:
+            recorder = VideoRecorder(loop.sim, folder / "small.mp4", fps=10, size=size,
+                                     overlay=overlay, legend=legend)
+        except Exception as err:  # noqa: BLE001 - GL backends fail in assorted types
+            pytest.skip(f"no offscreen OpenGL on this machine: {' '.join(str(err).split())}")
+        recorder.close()
+        assert (recorder.legend is not None) == has_it, (size, legend)
+    assert 120 < LEGEND_MIN_HEIGHT_PX <= 240
+
+
 def _rounded(rgba) -> tuple[float, ...]:
     return tuple(round(float(v), 3) for v in rgba)
 
@@ -333,9 +411,9 @@ def test_the_viewer_hook_replaces_the_user_scene_and_shows_the_panel(raising):
     assert handle.locked == 3  # the camera, then each drawing
     hook.close()  # shows the last panel posted, then stops the text thread
     assert handle.closed
-    font, where, names, values = handle.texts[-1]
-    assert font is None and where == mujoco.mjtGridPos.mjGRID_TOPLEFT
-    assert (names, values) == overlay.status_lines(loop)
+    panel, legend = handle.texts[-1]
+    assert panel == (None, mujoco.mjtGridPos.mjGRID_TOPLEFT, *overlay.status_lines(loop))
+    assert legend == (None, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT, *overlay.legend_lines())
 
 
 def test_the_overlay_module_leaves_mujoco_unimported():
