@@ -19,6 +19,7 @@ from actions.action_type import (
     SIT,
     STAND,
     ActionType,
+    action_type_named,
 )
 from actions.behaviour import Behaviour, StepResult
 from actions.client_goal_handle import ClientGoalHandle
@@ -136,6 +137,7 @@ __all__ = [
     "UnknownFieldError",
     "Vector3",
     "WrappedResult",
+    "action_type_named",
     "as_duration",
     "check_transition",
     "legal_next_statuses",

@@ -68,7 +68,7 @@ exit status:
     2  bad arguments, an action that is not served included (the message names the
        argument and what is valid)
     3  the action server rejected the goal (the reason is printed)
-    4  cannot run here (no offscreen rendering for --video)
+    4  cannot run here (no offscreen rendering for --video, a MUJOCO_GL MuJoCo rejects)
   130  interrupted: Ctrl-C cancels the goal and waits for the robot to unwind
 """
 
@@ -1120,12 +1120,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run ``go2-wbc``; returns the exit code (see ``go2-wbc --help``)."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if hasattr(args, "plant"):  # the commands that simulate
-        _check_combinations(args)
     try:
+        if hasattr(args, "plant"):  # the commands that simulate
+            _check_combinations(args)
         return int(args.run(args))
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
+    except RuntimeError as err:
+        # MuJoCo refuses to import under a MUJOCO_GL it does not know: nothing can run.
+        if "MUJOCO_GL" not in str(err):
+            raise
+        print(f"go2-wbc: {err}; unset it, or set one MuJoCo knows (egl, osmesa, glfw)",
+              file=sys.stderr)
+        return EXIT_UNAVAILABLE
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ import dataclasses
 import io
 import json
 import math
+import os
 import re
 import subprocess
 import sys
@@ -22,6 +23,7 @@ from sim.cli import (
     EXIT_NOT_SUCCEEDED,
     EXIT_REJECTED,
     EXIT_SUCCEEDED,
+    EXIT_UNAVAILABLE,
     EXIT_USAGE,
     SETTLE_S,
     TRAJECTORY_FORMAT_HELP,
@@ -606,3 +608,17 @@ def test_start_up_objects_are_frozen_while_the_loop_runs_and_released_after(monk
     assert code == EXIT_SUCCEEDED
     assert min(seen) > before + 100_000  # the models, MuJoCo, numba's code: out of every scan
     assert gc.get_freeze_count() == before  # given back when the run ends
+
+
+def test_a_mujoco_gl_that_mujoco_rejects_is_one_line_and_exit_4():
+    # MuJoCo reads MUJOCO_GL when first imported: a fresh interpreter.
+    env = {**os.environ, "MUJOCO_GL": "bogus"}
+    done = subprocess.run(
+        [sys.executable, "-c", ("import sys; from sim.cli import main; "
+                                "sys.exit(main(['high-five', '--hold', '0']))")],
+        cwd=Path(__file__).resolve().parents[1], env=env, capture_output=True, text=True,
+        timeout=120, check=False)
+    assert done.returncode == EXIT_UNAVAILABLE, done.stderr
+    assert done.stderr.strip() == (
+        "go2-wbc: invalid value for environment variable MUJOCO_GL: bogus; unset it, or set "
+        "one MuJoCo knows (egl, osmesa, glfw)")

@@ -130,3 +130,12 @@ def test_posture_and_foot_weights(standing):
     controller.reset(q)
     assert controller.stance_legs == ["FL", "FR", "RL", "RR"]
     np.testing.assert_allclose(controller.posture_target, q[7:])
+
+
+def test_unknown_and_bad_parameters_are_named_as_the_default_controller_names_them():
+    with pytest.raises(ConfigurationError, match=r"^unknown controller parameter\(s\) "
+                                                 r"\['com_gain', 'wieght'\]; valid controller "
+                                                 r"parameters: backend, "):
+        PlacoController(com_gain=1.0, wieght=2.0)
+    with pytest.raises(ConfigurationError, match=r"^stance_kp: .*\[0, 500\], received 900"):
+        PlacoController(stance_kp=900.0)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
 import numpy as np
@@ -176,3 +176,19 @@ def _in_range(name: str, value: object, bounds: tuple[float, float | None, bool]
     except NonFiniteError:
         raise NonFiniteError(
             f"{name}: expected a finite number in {interval}, received {value!r}") from None
+
+
+def config_with_overrides(config: ControllerConfig | None, overrides: dict[str, object]
+                          ) -> ControllerConfig:
+    """``config`` (the defaults when None) with the fields in ``overrides`` changed.
+
+    Raises:
+        ConfigurationError: Keys that are not fields (every one named, the fields listed), or
+            a value out of its range (the field and the range named).
+    """
+    unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
+    if unknown:  # all of them at once (ControllerConfig itself names the first)
+        valid = ", ".join(ControllerConfig.__dataclass_fields__)
+        raise ConfigurationError(
+            f"unknown controller parameter(s) {unknown}; valid controller parameters: {valid}")
+    return replace(config or ControllerConfig(), **overrides)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -13,7 +12,7 @@ import placo
 
 from wbc.contact_modes import ContactModes
 from wbc.control_output import ControlOutput, ControlStatus
-from wbc.controller_config import ControllerConfig
+from wbc.controller_config import ControllerConfig, config_with_overrides
 from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.motor_command_shaper import MotorCommandShaper
@@ -82,11 +81,7 @@ class PlacoController(ContactModes):
             description: The robot files (found automatically by default).
             **overrides: Fields of :class:`ControllerConfig` to change, e.g. ``com_kp=100``.
         """
-        unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
-        if unknown:
-            valid = ", ".join(ControllerConfig.__dataclass_fields__)
-            raise ConfigurationError(f"unknown parameter(s) {unknown}; valid parameters: {valid}")
-        self.config = cfg = replace(config or ControllerConfig(), **overrides)
+        self.config = cfg = config_with_overrides(config, overrides)
         self.description = description or Go2Description.default()
         # PlaCo resolves the URDF's package:// mesh URIs even when it ignores collisions.
         self.description.set_ros_package_path()

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
 from typing import Any
 
 import numba
@@ -31,7 +30,7 @@ from tasks.torque_limits import TorqueLimits
 from wbc.backends import INFINITY, QpProblem, QpResult, make_backend
 from wbc.contact_modes import ContactModes
 from wbc.control_output import ControlOutput, ControlStatus
-from wbc.controller_config import ControllerConfig
+from wbc.controller_config import ControllerConfig, config_with_overrides
 from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
 from wbc.errors import ConfigurationError
 from wbc.motor_command_shaper import MotorCommandShaper
@@ -103,15 +102,7 @@ class WholeBodyController(ContactModes):
             UnknownNameError: A backend that is not installed (the message lists those that
                 are).
         """
-        base = config or ControllerConfig()
-        unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
-        if unknown:  # all of them at once (ControllerConfig itself names the first)
-            valid = ", ".join(ControllerConfig.__dataclass_fields__)
-            raise ConfigurationError(
-                f"unknown controller parameter(s) {unknown}; valid controller parameters: "
-                f"{valid}")
-        self.config = replace(base, **overrides)
-        cfg = self.config
+        self.config = cfg = config_with_overrides(config, overrides)
         self.description = description or Go2Description.default()
         self.model = self.description.build_model()
         self.data = self.model.createData()
