@@ -21,8 +21,8 @@ from actions.errors import (
     GoalRejectedError,
     RunnerStalledError,
 )
-from actions.validation import is_finite_real
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import is_finite_real
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle

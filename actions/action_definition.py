@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 _INTEGER_TYPES = frozenset(
     {"byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64"}

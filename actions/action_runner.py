@@ -44,8 +44,8 @@ from actions.responses import (
     RejectionCode,
     WrappedResult,
 )
-from actions.validation import is_finite_real
-from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.core.validation import is_finite_real
 
 if TYPE_CHECKING:
     from actions.action_server import ActionServer

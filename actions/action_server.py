@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 from actions.action_type import ActionType
 from actions.behaviour import Behaviour
 from actions.responses import GoalResponse, Rejection, RejectionCode
-from actions.validation import is_finite_real
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import is_finite_real
 
 if TYPE_CHECKING:
     from actions.action_runner import ActionRunner

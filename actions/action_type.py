@@ -29,7 +29,7 @@ from actions.messages import (
     StandGoal,
     StandResult,
 )
-from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.core.errors import ConfigurationError, UnknownNameError
 
 INTERFACES_DIR = Path(__file__).resolve().parent / "interfaces"
 #: The ROS 2 package of this library's own interfaces (HighFive, Stand, Sit).

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Generic, TypeVar
 
 from actions.goal_status import TERMINAL_STATUSES, GoalStatus
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 GoalT = TypeVar("GoalT")
 ResultT = TypeVar("ResultT")

@@ -18,7 +18,7 @@ import numbers
 from typing import Any
 
 from actions import messages
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 _NANOSECONDS_PER_SECOND = 1_000_000_000
 

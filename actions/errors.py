@@ -1,10 +1,10 @@
-"""Errors raised by the action machinery, all in the library's :class:`~wbc.errors.WbcError` family."""
+"""Errors raised by the action machinery, all in the library's :class:`~wbc.core.errors.WbcError` family."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from wbc.errors import ConfigurationError, WbcError
+from wbc.core.errors import ConfigurationError, WbcError
 
 if TYPE_CHECKING:
     from concurrent.futures import Future

@@ -14,7 +14,7 @@ from typing import Any, TypeVar
 
 from actions.errors import UnknownFieldError
 from actions.messages import Message, field_types, no_such_field
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 M = TypeVar("M", bound=Message)
 

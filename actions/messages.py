@@ -18,7 +18,7 @@ and, as with ROS 2's ``__slots__``, a misspelt field is an error
 
 Fields are checked when a message is built with keywords and again when it is sent (by
 :meth:`Message.validated_copy`, which ``ActionClient.send_goal_async`` calls): a wrong type
-raises :class:`~wbc.errors.ConfigurationError` naming the field (as a path from the message
+raises :class:`~wbc.core.errors.ConfigurationError` naming the field (as a path from the message
 built or sent, e.g. ``FollowJointTrajectoryGoal.trajectory.points[0].positions[1]``), the
 value received and what is valid. Plain assignments are not checked on the spot, so a
 message may pass through invalid states while it is being filled. Numbers are normalised
@@ -44,8 +44,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from actions.errors import UnknownFieldError
-from actions.validation import is_finite_real
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import is_finite_real
 
 _NANOSECONDS_PER_SECOND = 1_000_000_000
 

@@ -14,7 +14,7 @@ from enum import Enum, IntEnum
 from typing import Any
 
 from actions.goal_status import GoalStatus
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 
 class GoalResponse(Enum):

@@ -18,7 +18,7 @@ import functools
 
 from actions import messages
 from actions.duration import Duration, total_nanoseconds
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 _NANOSECONDS_PER_SECOND = 1_000_000_000
 

@@ -44,8 +44,8 @@ from benchmarks.robustness import (
     run_high_five,
 )
 from sim.run_recorder import MetricsHook
-from wbc.estimators import ESTIMATORS, make_estimator
-from wbc.sensor_record import SensorRecord
+from wbc.estimation.estimators import ESTIMATORS, make_estimator
+from wbc.robot_io.sensor_record import SensorRecord
 
 #: The state sources compared: the simulator's truth, then each estimator by name.
 SOURCES = ("truth", *ESTIMATORS)

@@ -41,20 +41,15 @@ from typing import Any
 
 import numpy as np
 
-from actions.high_five_behaviour import PHASE_NAMES
+from actions.go2.high_five_behaviour import PHASE_NAMES
 from sim.control_loop import ControlLoop
 from sim.run_recorder import MetricsHook
-from wbc import (
-    BalanceController,
-    ControllerConfig,
-    LegLift,
-    LegLiftTiming,
-    LiftPhase,
-    PlacoController,
-    WholeBodyController,
-    available_backends,
-)
-from wbc.backends import missing_backends
+from wbc.backends.backend import available_backends, missing_backends
+from wbc.controller.balance_controller import BalanceController
+from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.placo_controller import PlacoController
+from wbc.controller.whole_body_controller import WholeBodyController
+from wbc.motions.leg_lift import LegLift, LegLiftTiming, LiftPhase
 
 LEG, HEIGHT_M = "FR", 0.40
 WARMUP_TICKS = 200

@@ -38,8 +38,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from actions import GoalStatus, HighFiveGoal
-from actions.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_deg
+from actions.go2.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_deg
+from actions.goal_status import GoalStatus
+from actions.messages import HighFiveGoal
 from benchmarks.qp_timing import machine
 from sim.cli import MetricsHook
 from sim.control_loop import ControlLoop, TickHook
@@ -48,11 +49,11 @@ from sim.episode_metrics import EpisodeSummary
 from sim.plant import Plant
 from sim.sensor_faults import SensorFault
 from sim.sensors import DEFAULT_SENSORS, SensorModel
-from wbc.balance_controller import BalanceController
-from wbc.description import LEGS
-from wbc.estimators import DEFAULT_ESTIMATOR, make_estimator
-from wbc.leg_lift import LegLiftTiming
-from wbc.whole_body_controller import WholeBodyController
+from wbc.controller.balance_controller import BalanceController
+from wbc.controller.whole_body_controller import WholeBodyController
+from wbc.estimation.estimators import DEFAULT_ESTIMATOR, make_estimator
+from wbc.model.description import LEGS
+from wbc.motions.leg_lift import LegLiftTiming
 
 HEIGHT_M, HOLD_S = 0.40, 1
 #: The robot stands this long [s] before the goal is sent (the plant spawns without contact
@@ -95,7 +96,7 @@ class PlantCase:
     state: str = "estimate"
     #: Sensor faults, their times counted from the goal's start [s].
     sensor_faults: tuple[SensorFault, ...] = ()
-    #: The state estimator (:data:`wbc.estimators.ESTIMATORS`), when estimating.
+    #: The state estimator (:data:`wbc.estimation.estimators.ESTIMATORS`), when estimating.
     estimator: str = DEFAULT_ESTIMATOR
 
     def sensor_model(self) -> SensorModel:

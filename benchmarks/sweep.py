@@ -45,8 +45,8 @@ from benchmarks.sweep_spec import (
     value_text,
 )
 from sim.sensors import DEFAULT_SENSORS
-from wbc.errors import ConfigurationError
-from wbc.estimators import DEFAULT_ESTIMATOR
+from wbc.core.errors import ConfigurationError
+from wbc.estimation.estimators import DEFAULT_ESTIMATOR
 
 #: Exit statuses: done; an episode raised (its record says what; run again to retry);
 #: usage error; interrupted (run again to resume).

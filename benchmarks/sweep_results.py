@@ -8,7 +8,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from wbc.errors import WbcError
+from wbc.core.errors import WbcError
 
 
 class SweepResultsError(WbcError, ValueError):

@@ -20,7 +20,7 @@ from typing import Any
 
 from benchmarks.robustness import process_pool
 from benchmarks.sweep_spec import EpisodeSpec
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 #: ``auto``: Ray when installed, else the process pool.
 EXECUTORS = ("auto", "ray", "process", "serial")

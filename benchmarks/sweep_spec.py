@@ -47,8 +47,8 @@ from typing import Any
 
 import yaml
 
-from actions.high_five_behaviour import MAX_HOLD_S
-from actions.robot_interface import STATE_SOURCES
+from actions.go2.high_five_behaviour import MAX_HOLD_S
+from actions.robot.robot_interface import STATE_SOURCES
 from benchmarks import robustness
 from benchmarks.robustness import PlantCase, hold_push
 from sim.control_loop import PHYSICS_TIMESTEP_S
@@ -56,11 +56,11 @@ from sim.disturbances import Push
 from sim.mujoco_robot import physics_steps_per_period
 from sim.plant import PLANT_PRESETS, Plant
 from sim.sensors import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
-from wbc.backends import available_backends
-from wbc.controller_config import ControllerConfig
-from wbc.errors import ConfigurationError, WbcError
-from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
-from wbc.validation import as_float
+from wbc.backends.backend import available_backends
+from wbc.controller.controller_config import ControllerConfig
+from wbc.core.errors import ConfigurationError, WbcError
+from wbc.core.validation import as_float
+from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
 
 class SweepSpecError(ConfigurationError):

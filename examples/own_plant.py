@@ -21,9 +21,9 @@ import mujoco
 import numpy as np
 
 from actions import GoalStatus, HighFiveGoal
-from sim.control_loop import ControlLoop
+from actions.robot.control_loop import ControlLoop
 from wbc import Go2Description, MotorCommand, SensorRecord, WholeBodyController, make_estimator
-from wbc.description import UNITREE_SDK_JOINT_NAMES
+from wbc.model.description import UNITREE_SDK_JOINT_NAMES
 
 #: The SDK's leg order, which this plant's foot array would use (it has no foot sensors).
 SDK_LEGS = ("FR", "FL", "RR", "RL")

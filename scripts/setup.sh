@@ -26,4 +26,4 @@ fi
 .venv/bin/python -c "import pinocchio, placo, mujoco, qpsolvers, daqp; print('setup: ok, pinocchio', pinocchio.__version__, 'placo imports, mujoco', mujoco.__version__)"
 # Compile the controller's numba kernel once now (about 20 s), not on the first run.
 echo "setup: compiling the controller kernel (once)"
-.venv/bin/python -c "from wbc.whole_body_controller import warm_up; warm_up()"
+.venv/bin/python -c "from wbc.controller.whole_body_controller import warm_up; warm_up()"

@@ -20,7 +20,7 @@ import yaml
 
 from actions.action_client import ActionClient
 from actions.action_type import ACTION_TYPES, ActionType, action_type_named
-from actions.go2_actions import GO2_ACTIONS
+from actions.go2.go2_actions import GO2_ACTIONS
 from actions.goal_status import GoalStatus
 from actions.message_fields import set_message_fields
 from actions.responses import FeedbackMessage
@@ -40,7 +40,7 @@ from sim.cli import (
     startup_objects_frozen,
     state_line,
 )
-from wbc.errors import WbcError
+from wbc.core.errors import WbcError
 
 if TYPE_CHECKING:
     from sim.control_loop import ControlLoop

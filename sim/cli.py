@@ -20,34 +20,34 @@ import numpy as np
 
 # actions/ and wbc/ never import mujoco, and these sim/ modules import it only when used,
 # so all of them are safe before MUJOCO_GL is chosen.
-from actions.go2_actions import (
+from actions.go2.go2_actions import (
     FOLLOW_JOINT_TRAJECTORY_ACTION,
     HIGH_FIVE_ACTION,
     SIT_ACTION,
     STAND_ACTION,
 )
-from actions.high_five_behaviour import MAX_HOLD_S
+from actions.go2.high_five_behaviour import MAX_HOLD_S
+from actions.go2.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
 from actions.messages import FollowJointTrajectoryGoal, HighFiveGoal, SitGoal, StandGoal
-from actions.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
-from actions.robot_interface import STATE_SOURCES
+from actions.robot.robot_interface import STATE_SOURCES
+from sim.cli_trajectory_file import load_trajectory_goal
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.run_recorder import RAISED_LEG, MetricsHook, TickRecorder, write_plot
 from sim.scene_overlay import DEFAULT_OVERLAYS, SceneOverlay, parse_overlays
 from sim.sensor_faults import FAULT_KINDS, SensorFault
 from sim.sensors import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
-from sim.trajectory_file import load_trajectory_goal
 from sim.video_recorder import VideoRecorder, choose_offscreen_gl
 from sim.viewer import Pacer, ViewerHook, window_problem
-from wbc.description import LEGS
-from wbc.errors import ConfigurationError, WbcError
-from wbc.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, make_estimator
-from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
+from wbc.core.errors import ConfigurationError, WbcError
+from wbc.estimation.estimators import DEFAULT_ESTIMATOR, ESTIMATORS, make_estimator
+from wbc.model.description import LEGS
+from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
     from sim.control_loop import ControlLoop
     from sim.disturbances import PushSchedule
-    from wbc.control_output import ControlOutput
+    from wbc.controller.control_output import ControlOutput
 
 #: Exit codes.
 EXIT_SUCCEEDED, EXIT_NOT_SUCCEEDED, EXIT_USAGE, EXIT_REJECTED, EXIT_UNAVAILABLE = 0, 1, 2, 3, 4
@@ -657,7 +657,7 @@ def _trajectory(args: argparse.Namespace) -> int:
 
 def _stand_pd(args: argparse.Namespace) -> int:
     from sim.simulator import Go2Simulator
-    from wbc.joint_pd_controller import JointPdController
+    from wbc.controller.joint_pd_controller import JointPdController
 
     print(_plant_line(args))
     sim = Go2Simulator(plant=args.plant_model, timestep_s=args.physics_dt)

@@ -13,15 +13,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from actions.robot_interface import RobotInterface, RobotWrapper
-from wbc.errors import ConfigurationError
-from wbc.motor_command import MotorCommand
+from actions.robot.robot_interface import RobotInterface, RobotWrapper
+from wbc.core.errors import ConfigurationError
+from wbc.robot_io.motor_command import MotorCommand
 
 
 class DelayedRobot(RobotWrapper):
     """A robot whose commands arrive ``delay_ticks`` control periods late.
 
-    Wraps a :class:`~actions.robot_interface.RobotInterface` (same orders; sensors and the
+    Wraps a :class:`~actions.robot.robot_interface.RobotInterface` (same orders; sensors and the
     exact state pass through): a transport delay between the controller and the motor
     drivers (legged_control's simulation of a Unitree robot applies commands 9 ms late).
     Until the queue fills, the first command is applied. Sensor noise is the sensor model's

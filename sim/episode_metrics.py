@@ -9,9 +9,9 @@ import numba
 import numpy as np
 
 from sim.simulator import Go2Simulator
-from wbc.control_output import ControlOutput
-from wbc.description import LEGS
-from wbc.support_polygon import shrunk_signed_distance
+from wbc.controller.control_output import ControlOutput
+from wbc.model.description import LEGS
+from wbc.model.support_polygon import shrunk_signed_distance
 
 #: A foot carrying less than this [N] counts as unloaded.
 LOADED_FORCE_N = 1.0

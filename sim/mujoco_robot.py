@@ -6,10 +6,10 @@ import numpy as np
 
 from sim.sensors import DEFAULT_SENSORS, SensorModel, SimulatedSensors
 from sim.simulator import Go2Simulator
-from wbc.errors import ConfigurationError
-from wbc.motor_command import MotorCommand
-from wbc.sensor_record import SensorRecord
-from wbc.validation import as_float
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float
+from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.sensor_record import SensorRecord
 
 
 class MujocoRobot:

@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from wbc.errors import ConfigurationError
-from wbc.validation import as_float, check_name
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, check_name
 
 if TYPE_CHECKING:
     import mujoco

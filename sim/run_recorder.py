@@ -9,15 +9,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from actions.high_five_behaviour import PHASE_NAMES
-from wbc.description import JOINT_NAMES, LEGS
-from wbc.leg_lift import LiftPhase
-from wbc.sensor_log import log_row
-from wbc.support_polygon import shrunk_signed_distance
+from actions.go2.high_five_behaviour import PHASE_NAMES
+from wbc.model.description import JOINT_NAMES, LEGS
+from wbc.model.support_polygon import shrunk_signed_distance
+from wbc.motions.leg_lift import LiftPhase
+from wbc.robot_io.sensor_log import log_row
 
 if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
-    from wbc.control_output import ControlOutput
+    from wbc.controller.control_output import ControlOutput
 
 #: The foot a HighFive goal raises.
 RAISED_LEG = "FR"
@@ -34,9 +34,9 @@ class TickRecorder:
     ``q``, ``v`` are the controller's state (the estimate, unless ``--state truth``);
     ``q_true``, ``v_true`` the simulator's exact state at the same instant;
     ``estimate_contact`` the estimator's contact weight of each foot and ``estimate_flags``
-    its fault flags (``wbc.state_estimator``'s constants; 0 with ``--state truth``); when
+    its fault flags (``wbc.estimation.state_estimator``'s constants; 0 with ``--state truth``); when
     estimating, every sensor record the estimator read and its contact schedule
-    (:class:`wbc.sensor_log.SensorLog` reads them back).
+    (:class:`wbc.robot_io.sensor_log.SensorLog` reads them back).
     """
 
     def __init__(self, phase_of: Callable[[], str], leg: str = RAISED_LEG,
@@ -77,7 +77,7 @@ class TickRecorder:
         row["estimate_contact"].append(np.ones(len(LEGS)) if estimate is None
                                        else np.array(estimate.contact))
         row["estimate_flags"].append(0 if estimate is None else estimate.flags)
-        if loop.estimator is not None:  # what the estimator read: a sensor log (wbc.sensor_log)
+        if loop.estimator is not None:  # what the estimator read: a sensor log (wbc.robot_io.sensor_log)
             for name, value in log_row(loop.estimator.last_sample,
                                        loop.estimator.last_schedule).items():
                 row.setdefault(name, []).append(value)

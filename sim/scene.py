@@ -9,9 +9,9 @@ import mujoco
 import numpy as np
 
 from sim.plant import DEFAULT_PLANT, Plant
-from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, Go2Description
-from wbc.errors import ConfigurationError
-from wbc.validation import as_float, check_name
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, check_name
+from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, Go2Description
 
 #: Collision groups: robot geoms touch the floor but not each other.
 _ROBOT_CONTYPE, _ROBOT_CONAFFINITY = 2, 1

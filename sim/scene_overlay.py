@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wbc.description import FOOT_RADIUS_M, LEGS
-from wbc.errors import ConfigurationError
-from wbc.support_polygon import SupportPolygon
-from wbc.validation import as_float
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float
+from wbc.model.description import FOOT_RADIUS_M, LEGS
+from wbc.model.support_polygon import SupportPolygon
 
 if TYPE_CHECKING:
     import mujoco

@@ -1,6 +1,6 @@
 """Sensor faults on a schedule: what a GO2's sensors do when they fail, for tests and demos.
 
-:class:`FaultyRobot` wraps a :class:`~actions.robot_interface.RobotInterface` and, while a
+:class:`FaultyRobot` wraps a :class:`~actions.robot.robot_interface.RobotInterface` and, while a
 :class:`SensorFault` is active (from ``at_s`` for ``duration_s`` of the robot's clock),
 corrupts the records it passes on (:data:`FAULT_KINDS`): a NaN or a non-unit IMU quaternion,
 a NaN gyroscope, accelerometer or joint encoder, a repeated (stale) sample, no sample at
@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from actions.robot_interface import RobotInterface, RobotWrapper
-from wbc.description import JOINT_NAMES, LEGS
-from wbc.errors import ConfigurationError
-from wbc.sensor_record import SensorRecord
-from wbc.validation import as_float, check_name
+from actions.robot.robot_interface import RobotInterface, RobotWrapper
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, check_name
+from wbc.model.description import JOINT_NAMES, LEGS
+from wbc.robot_io.sensor_record import SensorRecord
 
 #: The faults, and what each does to the records while it lasts.
 FAULT_KINDS: dict[str, str] = {

@@ -36,11 +36,11 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 
-from wbc.description import LEGS
-from wbc.errors import ConfigurationError
-from wbc.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, rotate_inverse
-from wbc.sensor_record import SensorRecord
-from wbc.validation import as_float, check_name, known_fields_only
+from wbc.core.errors import ConfigurationError
+from wbc.core.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, rotate_inverse
+from wbc.core.validation import as_float, check_name, known_fields_only
+from wbc.model.description import LEGS
+from wbc.robot_io.sensor_record import SensorRecord
 
 if TYPE_CHECKING:
     from sim.simulator import Go2Simulator
@@ -353,7 +353,7 @@ class SimulatedSensors:
         self._leg_rows = np.array([LEGS.index(leg) for leg in legs], dtype=np.intp)
         self._joint_qpos = np.ascontiguousarray(sim.actuator_qpos, dtype=np.intp)
         self._joint_dof = np.ascontiguousarray(sim.actuator_dof, dtype=np.intp)
-        from wbc.leg_kinematics import LegKinematics
+        from wbc.model.leg_kinematics import LegKinematics
 
         self._imu_offset = LegKinematics(sim.description).imu_offset.copy()
         self._params = model._vector()

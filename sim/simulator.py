@@ -12,12 +12,12 @@ import numpy as np
 
 from sim.plant import DEFAULT_PLANT, Plant
 from sim.scene import build_go2_spec
-from wbc.conventions import mujoco_to_pin, pin_to_mujoco
-from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
-from wbc.errors import ConfigurationError
-from wbc.joint_map import JointMap
-from wbc.motor_command import MotorCommand
-from wbc.validation import as_float, as_vector, check_name
+from wbc.core.conventions import mujoco_to_pin, pin_to_mujoco
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, as_vector, check_name
+from wbc.model.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
+from wbc.model.joint_map import JointMap
+from wbc.robot_io.motor_command import MotorCommand
 
 _VECTOR = numba.float64[:]
 _CONTIGUOUS = numba.float64[::1]
@@ -26,7 +26,7 @@ _CONTIGUOUS = numba.float64[::1]
 @numba.njit(numba.boolean(_CONTIGUOUS, _CONTIGUOUS, _CONTIGUOUS, _CONTIGUOUS), cache=True,
             error_model="numpy")
 def _pin_state(qpos, qvel, q, v):
-    """:func:`wbc.conventions.mujoco_to_pin` into ``q``, ``v``; False on a non-finite entry.
+    """:func:`wbc.core.conventions.mujoco_to_pin` into ``q``, ``v``; False on a non-finite entry.
 
     The same arithmetic (NumPy's BLAS may round the last bit differently): the quaternion
     ``(w, x, y, z) -> (x, y, z, w)`` and the free joint's linear velocity from the world
@@ -79,7 +79,7 @@ class Go2Simulator:
     """A MuJoCo plant of the GO2, spoken to in the description's conventions.
 
     Motor commands (or bare torques) go in and states come out in the description's joint
-    order and in Pinocchio's conventions (see :mod:`wbc.conventions`); the plant's own
+    order and in Pinocchio's conventions (see :mod:`wbc.core.conventions`); the plant's own
     actuator order may differ and is wired by name. Each joint's motor driver applies
     ``tau_ff + kp (q_des - q) + kd (dq_des - dq)``, clipped at the effort limit, at every
     physics step.
@@ -203,7 +203,7 @@ class Go2Simulator:
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q (19,), v (18,))`` in Pinocchio convention, description order (new arrays).
 
-        :func:`wbc.conventions.mujoco_to_pin`, compiled (the base's linear velocity may
+        :func:`wbc.core.conventions.mujoco_to_pin`, compiled (the base's linear velocity may
         differ in its last bit); a non-finite state raises as it does.
 
         Raises:

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
     from sim.scene_overlay import SceneOverlay
     from sim.simulator import Go2Simulator
-    from wbc.control_output import ControlOutput
+    from wbc.controller.control_output import ControlOutput
 
 
 #: Height [px] of the legend's text in a 480 px tall frame; it scales with the frame.

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
     from sim.scene_overlay import SceneOverlay
     from sim.simulator import Go2Simulator
-    from wbc.control_output import ControlOutput
+    from wbc.controller.control_output import ControlOutput
 
 #: The view the viewer opens with and videos are shot from: the base tracked from its front
 #: right, low enough to see the sky, high enough to see the support polygon between the feet.

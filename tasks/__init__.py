@@ -1,6 +1,6 @@
 """Acceleration-level tasks and QP constraints for whole-body control, with compiled kernels."""
 
-# The tasks' modules use wbc.errors and wbc.validation, and wbc's controller imports the
+# The tasks' modules use wbc.core.errors and wbc.core.validation, and wbc's controller imports the
 # tasks: wbc is imported first, while no module here is half-imported, so that the
 # controller's imports of the tasks' modules complete.
 import wbc  # noqa: F401
@@ -12,13 +12,13 @@ from tasks.floating_base_dynamics import FloatingBaseDynamics
 from tasks.frame_position_task import FramePositionTask
 from tasks.friction_cones import FrictionCones
 from tasks.joint_limits import JointLimits
-from tasks.kinematics import RobotKinematics
 from tasks.posture_task import PostureTask
 from tasks.stance_contacts import StanceContacts
 from tasks.support_polygon_barrier import SupportPolygonBarrier
 from tasks.task import Task
 from tasks.torque_limits import TorqueLimits
 from tasks.variable_layout import VariableLayout
+from wbc.model.kinematics import RobotKinematics
 
 __all__ = [
     "BaseOrientationTask", "ComTask", "Constraint", "ConstraintBlock", "ContactTask",

@@ -10,7 +10,7 @@ from tasks import task_kernels
 from tasks.task import Task
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 _XYZ = np.arange(3)
 

@@ -9,11 +9,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tasks.compiled_call import bind_compiled
+from wbc.core.compiled_call import bind_compiled
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
     from tasks.variable_layout import VariableLayout
+    from wbc.model.kinematics import RobotKinematics
 
 
 @dataclass
@@ -83,7 +83,7 @@ class Constraint:
 
         A problem builder keeps one per layout and calls it every tick. A built-in
         constraint's is its compiled kernel bound to its arrays
-        (:func:`tasks.compiled_call.bind_compiled`; getting it loads the compiled code, so
+        (:func:`wbc.core.compiled_call.bind_compiled`; getting it loads the compiled code, so
         the first tick in a layout does not); a constraint that overrides :meth:`update`
         gets that method with these arguments. Its arrays are read when it runs, but
         scalars are taken as they are now: a constraint whose setters change a value the
@@ -102,5 +102,5 @@ class Constraint:
         return None
 
     #: The cached ``(kinematics, block, bound kernel)`` of a compiled constraint (see
-    #: :func:`tasks.compiled_call.bind_compiled`).
+    #: :func:`wbc.core.compiled_call.bind_compiled`).
     _call: tuple | None = None

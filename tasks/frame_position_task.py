@@ -9,10 +9,10 @@ import pinocchio as pin
 
 from tasks import task_kernels
 from tasks.task import Task
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 

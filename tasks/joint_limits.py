@@ -9,10 +9,10 @@ import numpy as np
 from tasks import constraint_kernels
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.variable_layout import VariableLayout
-from wbc.validation import as_float, as_vector
+from wbc.core.validation import as_float, as_vector
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 
 class JointLimits(Constraint):

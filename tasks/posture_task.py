@@ -8,11 +8,11 @@ import numpy as np
 
 from tasks import task_kernels
 from tasks.task import Task
-from wbc.errors import ConfigurationError
-from wbc.validation import as_vector
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_vector
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 
 class PostureTask(Task):

@@ -10,7 +10,7 @@ from tasks.contact_task import ContactTask
 from tasks.variable_layout import VariableLayout
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 
 class StanceContacts(Constraint):

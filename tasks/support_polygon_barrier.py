@@ -9,11 +9,11 @@ import numpy as np
 from tasks import constraint_kernels
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.variable_layout import VariableLayout
-from wbc.errors import ConfigurationError
-from wbc.validation import as_float
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 #: Largest number of polygon edges (four feet).
 MAX_EDGES = 4

@@ -8,12 +8,12 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from tasks.compiled_call import bind_compiled
-from wbc.errors import ConfigurationError
-from wbc.validation import as_float, as_vector
+from wbc.core.compiled_call import bind_compiled
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, as_vector
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 
 @numba.njit("b1(f8[:, ::1], f8[:], f8[:], f8[:])", cache=True)
@@ -228,7 +228,7 @@ class Task:
         return None
 
     #: The cached ``(kinematics, bound kernel)`` of a compiled task (see
-    #: :func:`tasks.compiled_call.bind_compiled`).
+    #: :func:`wbc.core.compiled_call.bind_compiled`).
     _call: tuple | None = None
 
     def compute(self, kinematics: RobotKinematics) -> None:

@@ -10,10 +10,10 @@ from tasks import constraint_kernels
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.contact_task import ContactTask
 from tasks.variable_layout import VariableLayout
-from wbc.validation import as_vector
+from wbc.core.validation import as_vector
 
 if TYPE_CHECKING:
-    from tasks.kinematics import RobotKinematics
+    from wbc.model.kinematics import RobotKinematics
 
 
 class TorqueLimits(Constraint):

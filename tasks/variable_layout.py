@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 
 class VariableLayout:

@@ -5,12 +5,10 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 from sim.control_loop import ControlLoop
 from sim.run_recorder import MetricsHook
 from wbc import LegLift, LiftPhase, WholeBodyController
-from wbc.control_output import ControlOutput
+from wbc.controller.control_output import ControlOutput
 
 
 def tick(loop: ControlLoop) -> ControlOutput:

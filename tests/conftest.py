@@ -29,7 +29,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from wbc.description import Go2Description
+from wbc.model.description import Go2Description
 
 
 @pytest.fixture(scope="session")

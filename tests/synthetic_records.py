@@ -7,9 +7,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
-from wbc.sensor_record import SensorRecord
-from wbc.state_estimator import EstimatorBase, StateEstimate
+from wbc.estimation.state_estimator import EstimatorBase, StateEstimate
+from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
+from wbc.robot_io.sensor_record import SensorRecord
 
 LOADED = np.full(4, 200.0)  # the contact schedule of four loaded feet [N]
 LOADED_COUNT = 110.0  # a foot sensor's count under about 40 N

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from actions.action_type import ACTION_TYPES, HIGH_FIVE
-from actions.go2_actions import GO2_ACTIONS
-from actions.high_five_behaviour import INVALID_TARGET_HEIGHT
+from actions.go2.go2_actions import GO2_ACTIONS
+from actions.go2.high_five_behaviour import INVALID_TARGET_HEIGHT
 from sim.cli import EXIT_CODES_HELP, EXIT_REJECTED, EXIT_SUCCEEDED, EXIT_USAGE, main
 from sim.control_loop import ControlLoop
 

@@ -24,8 +24,8 @@ from actions.errors import (
 from actions.goal_status import TERMINAL_STATUSES, GoalStatus
 from actions.messages import HighFiveGoal, HighFiveResult, StandGoal
 from actions.responses import GoalResponse, Rejection, WrappedResult
-from actions.scripted_behaviour import ScriptedBehaviour, scripted_factory
-from wbc.errors import ConfigurationError, WbcError
+from tests.scripted_behaviour import ScriptedBehaviour, scripted_factory
+from wbc.core.errors import ConfigurationError, WbcError
 
 S = GoalStatus
 HF = HighFiveGoal(target_height=0.1, hold_seconds=1)

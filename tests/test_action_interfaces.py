@@ -8,7 +8,7 @@ import pytest
 
 from actions.action_definition import parse_action_file
 from actions.action_type import ACTION_TYPES, FOLLOW_JOINT_TRAJECTORY
-from actions.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, GO2_ACTIONS
+from actions.go2.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, GO2_ACTIONS
 from actions.messages import (
     Duration,
     FollowJointTrajectoryGoal,

@@ -32,8 +32,8 @@ from actions.responses import (
     RejectionCode,
     WrappedResult,
 )
-from actions.scripted_behaviour import ScriptedBehaviour, scripted_factory
-from wbc.errors import ConfigurationError, UnknownNameError
+from tests.scripted_behaviour import ScriptedBehaviour, scripted_factory
+from wbc.core.errors import ConfigurationError, UnknownNameError
 
 S = GoalStatus
 HF = HighFiveGoal(target_height=0.1, hold_seconds=1)

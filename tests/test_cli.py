@@ -17,8 +17,8 @@ import imageio
 import numpy as np
 import pytest
 
-from actions.high_five_behaviour import ROBOT_NOT_READY
-from actions.robot_context import RobotContext
+from actions.go2.high_five_behaviour import ROBOT_NOT_READY
+from actions.go2.robot_context import RobotContext
 from sim.cli import (
     EXIT_NOT_SUCCEEDED,
     EXIT_REJECTED,
@@ -30,10 +30,10 @@ from sim.cli import (
     build_parser,
     main,
 )
+from sim.cli_trajectory_file import load_trajectory_goal
 from sim.plant import Plant
 from sim.sensor_faults import FAULT_KINDS
-from sim.trajectory_file import load_trajectory_goal
-from wbc.description import JOINT_NAMES, LEGS
+from wbc.model.description import JOINT_NAMES, LEGS
 
 HIGH_FIVE_PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading",
                     "shifting_back", "complete"]

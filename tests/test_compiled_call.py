@@ -1,9 +1,9 @@
-"""Tests of tasks.compiled_call: a kernel bound to its arguments runs the dispatcher's code."""
+"""Tests of wbc.core.compiled_call: a kernel bound to its arguments runs the dispatcher's code."""
 
 import numba
 import numpy as np
 
-from tasks.compiled_call import bind_compiled
+from wbc.core.compiled_call import bind_compiled
 
 
 @numba.njit(cache=False)

@@ -6,8 +6,8 @@ import pinocchio as pin
 import pytest
 
 from tests.conftest import random_configuration
-from wbc.conventions import mujoco_to_pin, pin_to_mujoco, reorder_quaternion
-from wbc.errors import ConfigurationError, NonFiniteError
+from wbc.core.conventions import mujoco_to_pin, pin_to_mujoco, reorder_quaternion
+from wbc.core.errors import ConfigurationError, NonFiniteError
 
 
 def test_quaternion_order():

@@ -11,7 +11,7 @@ from tasks import Constraint, RobotKinematics, Task
 from tests.conftest import random_configuration
 from wbc import WholeBodyController
 from wbc.backends import INFINITY
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 _PATH = Path(__file__).resolve().parents[1] / "examples" / "custom_task.py"
 _SPEC = importlib.util.spec_from_file_location("custom_task_example", _PATH)

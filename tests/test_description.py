@@ -5,11 +5,15 @@ import importlib.metadata
 import numpy as np
 import pytest
 
-from wbc import description as desc_module
-from wbc.description import (
-    FOOT_FRAMES, JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES, Go2Description,
+from wbc.core.errors import DescriptionNotFoundError, UnknownNameError
+from wbc.model import description as desc_module
+from wbc.model.description import (
+    FOOT_FRAMES,
+    JOINT_NAMES,
+    LEGS,
+    UNITREE_SDK_JOINT_NAMES,
+    Go2Description,
 )
-from wbc.errors import DescriptionNotFoundError, UnknownNameError
 
 
 def test_joint_order_is_urdf_order(description):

@@ -7,7 +7,7 @@ import pytest
 
 from actions import messages
 from actions.duration import Duration
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 
 def test_seconds_and_nanoseconds_add_up_and_round_to_the_nearest_nanosecond() -> None:

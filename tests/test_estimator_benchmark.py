@@ -7,7 +7,7 @@ import json
 import pytest
 
 from benchmarks import estimator
-from wbc.estimators import ESTIMATORS
+from wbc.estimation.estimators import ESTIMATORS
 
 
 @pytest.fixture(scope="module")

@@ -22,17 +22,17 @@ from actions import (
     StandGoal,
     Time,
 )
-from actions.follow_joint_trajectory_behaviour import (
+from actions.go2.follow_joint_trajectory_behaviour import (
     DEFAULT_GOAL_TOLERANCE_RAD,
     DEFAULT_PATH_TOLERANCE_RAD,
     FollowJointTrajectoryBehaviour,
     JointSpline,
     plan_trajectory,
 )
-from actions.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, STAND_ACTION
-from actions.robot_context import tilt_deg
+from actions.go2.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, STAND_ACTION
+from actions.go2.robot_context import tilt_deg
 from sim.control_loop import ControlLoop
-from wbc.description import JOINT_NAMES
+from wbc.model.description import JOINT_NAMES
 
 R = FollowJointTrajectoryResult
 FR_JOINTS = ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"]

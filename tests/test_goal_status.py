@@ -14,7 +14,7 @@ from actions.goal_status import (
     check_transition,
     legal_next_statuses,
 )
-from wbc.errors import WbcError
+from wbc.core.errors import WbcError
 
 S = GoalStatus
 

@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 
 from actions import BusyPolicy, GoalRejectedError, GoalStatus, HighFiveGoal
-from actions.high_five_behaviour import (
+from actions.go2.high_five_behaviour import (
     INVALID_HOLD_SECONDS,
     INVALID_TARGET_HEIGHT,
     ROBOT_NOT_READY,
 )
+from actions.go2.robot_context import tilt_deg
 from actions.messages import StandGoal
-from actions.robot_context import tilt_deg
 from sim.control_loop import ControlLoop
-from wbc.description import LEGS, UNITREE_SDK_JOINT_NAMES
+from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES
 
 PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading", "shifting_back",
           "complete"]

@@ -20,11 +20,9 @@ from tests.synthetic_records import (
     run,
     started,
 )
-from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
-from wbc.invariant_ekf import InvariantEkf, InvariantEkfConfig
-from wbc.leg_kinematics import LegKinematics
-from wbc.sensor_record import SensorRecord
-from wbc.state_estimator import (
+from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
+from wbc.estimation.invariant_ekf import InvariantEkf, InvariantEkfConfig
+from wbc.estimation.state_estimator import (
     ACCEL_BAD,
     GYRO_BAD,
     JOINTS_BAD,
@@ -34,6 +32,8 @@ from wbc.state_estimator import (
     STALE,
     StateEstimator,
 )
+from wbc.model.leg_kinematics import LegKinematics
+from wbc.robot_io.sensor_record import SensorRecord
 
 
 def roll_pitch_yaw_deg(q: np.ndarray) -> np.ndarray:

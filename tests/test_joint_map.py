@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from wbc.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
-from wbc.errors import ConfigurationError, UnknownNameError
-from wbc.joint_map import JointMap
+from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.model.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
+from wbc.model.joint_map import JointMap
 
 
 def test_unitree_sdk_order_by_name():

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from wbc.errors import ConfigurationError
-from wbc.joint_reference import JointReference
+from wbc.controller.joint_reference import JointReference
+from wbc.core.errors import ConfigurationError
 
 DT = 1e-3
 

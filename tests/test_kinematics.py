@@ -8,9 +8,9 @@ import pinocchio as pin
 import pytest
 from numba.core.runtime import _nrt_python, rtsys
 
-from tasks import kinematics as kinematics_module
-from tasks.kinematics import RobotKinematics
-from wbc.errors import ConfigurationError, NonFiniteError
+from wbc.core.errors import ConfigurationError, NonFiniteError
+from wbc.model import kinematics as kinematics_module
+from wbc.model.kinematics import RobotKinematics
 
 FRAMES = ("FL_foot", "FR_foot", "RL_foot", "RR_foot", "base", "FR_calf", "universe")
 OUTPUTS = ("q", "v", "mass_matrix", "nonlinear_effects", "gravity_torques", "com_position",

@@ -5,8 +5,8 @@ import pinocchio as pin
 import pytest
 
 from tests.conftest import random_configuration
-from wbc.description import FOOT_FRAMES, LEGS
-from wbc.leg_kinematics import LegKinematics
+from wbc.model.description import FOOT_FRAMES, LEGS
+from wbc.model.leg_kinematics import LegKinematics
 
 
 @pytest.fixture(scope="module")

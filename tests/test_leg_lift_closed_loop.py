@@ -10,7 +10,7 @@ import pytest
 from sim.control_loop import ControlLoop
 from tests.closed_loop import run_lift, settle
 from wbc import LegLift, LiftPhase
-from wbc.errors import ConfigurationError, ReachabilityError, UnknownNameError
+from wbc.core.errors import ConfigurationError, ReachabilityError, UnknownNameError
 
 ALL_PHASES = [LiftPhase.SHIFTING, LiftPhase.UNLOADING, LiftPhase.RAISING, LiftPhase.HOLDING,
               LiftPhase.LOWERING, LiftPhase.RELOADING, LiftPhase.SHIFTING_BACK, LiftPhase.DONE]

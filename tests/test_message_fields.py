@@ -15,7 +15,7 @@ from actions.messages import (
     JointTrajectory,
     JointTrajectoryPoint,
 )
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 
 def fill(cls: type, text: str) -> object:

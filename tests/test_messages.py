@@ -31,7 +31,7 @@ from actions.messages import (
     Time,
     as_duration,
 )
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 PRIMITIVES: dict[str, type] = {
     **dict.fromkeys(("float32", "float64"), float),

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from wbc.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
-from wbc.joint_map import JointMap
-from wbc.motor_command import MotorCommand, within_effort_limits
+from wbc.model.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
+from wbc.model.joint_map import JointMap
+from wbc.robot_io.motor_command import MotorCommand, within_effort_limits
 
 
 def random_command(rng: np.random.Generator) -> MotorCommand:

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from wbc import WholeBodyController
-from wbc.controller_config import ControllerConfig
-from wbc.description import JOINT_NAMES, Go2Description
-from wbc.errors import ConfigurationError
-from wbc.motor_command_shaper import MotorCommandShaper
+from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.motor_command_shaper import MotorCommandShaper
+from wbc.core.errors import ConfigurationError
+from wbc.model.description import JOINT_NAMES, Go2Description
 
 
 def shaper(**overrides) -> MotorCommandShaper:

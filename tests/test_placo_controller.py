@@ -7,11 +7,11 @@ import pytest
 
 from sim.control_loop import ControlLoop
 from sim.simulator import Go2Simulator
-from wbc.balance_controller import BalanceController
-from wbc.control_output import ControlStatus
-from wbc.description import LEGS
-from wbc.errors import ConfigurationError, ReachabilityError
-from wbc.placo_controller import PlacoController
+from wbc.controller.balance_controller import BalanceController
+from wbc.controller.control_output import ControlStatus
+from wbc.controller.placo_controller import PlacoController
+from wbc.core.errors import ConfigurationError, ReachabilityError
+from wbc.model.description import LEGS
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from wbc.description import FOOT_FRAMES, JOINT_NAMES
+from wbc.model.description import FOOT_FRAMES, JOINT_NAMES
 
 
 def test_placo_loads_the_same_go2(description, model):

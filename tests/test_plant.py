@@ -7,8 +7,8 @@ import pytest
 from sim.mujoco_robot import physics_steps_per_period
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, JointPhysics, Plant
 from sim.simulator import Go2Simulator
-from wbc.description import JOINT_NAMES
-from wbc.errors import ConfigurationError, UnknownNameError
+from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.model.description import JOINT_NAMES
 
 
 def joint_values(sim: Go2Simulator, name: str) -> tuple[float, float, float]:

@@ -4,8 +4,8 @@ import numpy as np
 import pinocchio as pin
 
 from wbc import WholeBodyController
-from wbc.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS
-from wbc.posture_transition import PostureTransition
+from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS
+from wbc.motions.posture_transition import PostureTransition
 
 
 def test_transition_uses_the_controllers_description_and_the_poses_geometry(description):

@@ -14,26 +14,26 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from actions import GoalStatus, HighFiveGoal
-from actions.high_five_behaviour import INVALID_HOLD_SECONDS, INVALID_TARGET_HEIGHT, MAX_HOLD_S
+from actions.go2.high_five_behaviour import INVALID_HOLD_SECONDS, INVALID_TARGET_HEIGHT, MAX_HOLD_S
+from actions.go2.robot_context import tilt_deg
 from actions.messages import (
     FollowJointTrajectoryGoal,
     FollowJointTrajectoryResult,
     JointTrajectory,
     JointTrajectoryPoint,
 )
-from actions.robot_context import tilt_deg
-from actions.robot_interface import MappedRobot
+from actions.robot.robot_interface import MappedRobot
 from sim import cli
 from sim.control_loop import ControlLoop
 from sim.mujoco_robot import MujocoRobot
 from sim.simulator import Go2Simulator
-from wbc.controller_config import ControllerConfig
-from wbc.conventions import mujoco_to_pin, pin_to_mujoco, reorder_quaternion
-from wbc.description import JOINT_NAMES, LEGS, Go2Description
-from wbc.errors import ConfigurationError
-from wbc.joint_map import JointMap
-from wbc.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
-from wbc.motor_command import MotorCommand
+from wbc.controller.controller_config import ControllerConfig
+from wbc.core.conventions import mujoco_to_pin, pin_to_mujoco, reorder_quaternion
+from wbc.core.errors import ConfigurationError
+from wbc.model.description import JOINT_NAMES, LEGS, Go2Description
+from wbc.model.joint_map import JointMap
+from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
+from wbc.robot_io.motor_command import MotorCommand
 
 #: Derandomized (the same examples every run) and without an example database on disk.
 SETTINGS = settings(max_examples=50, deadline=None, derandomize=True, database=None,

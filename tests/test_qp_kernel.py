@@ -6,9 +6,10 @@ import pytest
 
 from tasks.task_kernels import log3
 from tests.conftest import random_configuration
-from wbc import WholeBodyController, qp_kernel
+from wbc import WholeBodyController
 from wbc.backends.daqp_backend import DaqpBackend
-from wbc.description import LEGS
+from wbc.controller import qp_kernel
+from wbc.model.description import LEGS
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -10,14 +10,14 @@ around the integrated plan) must meet on them.
 import pytest
 
 from actions import GoalStatus
+from actions.go2.robot_context import STANDING_HEIGHT_M, tilt_deg
 from actions.messages import SitGoal, StandGoal
-from actions.robot_context import STANDING_HEIGHT_M, tilt_deg
 from benchmarks.robustness import PlantCase, run_high_five
 from sim.control_loop import ControlLoop
 from sim.plant import Plant
 from sim.run_recorder import MetricsHook
 from wbc import WholeBodyController
-from wbc.description import LEGS
+from wbc.model.description import LEGS
 
 PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading", "shifting_back",
           "complete"]

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from actions.robot_context import CAPTURE_MARGIN_LIMIT_M, RobotContext
-from wbc.description import LEGS
-from wbc.support_polygon import SupportPolygon
+from actions.go2.robot_context import CAPTURE_MARGIN_LIMIT_M, RobotContext
+from wbc.model.description import LEGS
+from wbc.model.support_polygon import SupportPolygon
 
 
 class StubController:

@@ -10,8 +10,8 @@ import pytest
 
 from actions import GoalStatus, HighFiveGoal
 from actions.action_runner import ActionRunner
+from actions.go2.robot_context import tilt_deg
 from actions.messages import StandGoal
-from actions.robot_context import tilt_deg
 from benchmarks import robustness
 from benchmarks.robustness import (
     DIRECTIONS_DEG,
@@ -30,8 +30,8 @@ from sim.sensor_faults import FaultyRobot, SensorFault
 from wbc.backends import QpProblem, QpResult, register_backend
 from wbc.backends.backend import unregister_backend
 from wbc.backends.daqp_backend import DaqpBackend
-from wbc.control_output import ControlStatus
-from wbc.whole_body_controller import WholeBodyController
+from wbc.controller.control_output import ControlStatus
+from wbc.controller.whole_body_controller import WholeBodyController
 
 PHASES = ["shifting", "unloading", "raising", "ready", "lowering", "reloading", "shifting_back",
           "complete"]

@@ -30,9 +30,9 @@ from actions import FOLLOW_JOINT_TRAJECTORY as FollowJointTrajectory
 from actions import HIGH_FIVE as HighFive
 from actions import ActionClient, GoalStatus, JointTrajectoryPoint
 from actions.duration import Duration
-from actions.follow_joint_trajectory_behaviour import DEFAULT_GOAL_TOLERANCE_RAD
+from actions.go2.follow_joint_trajectory_behaviour import DEFAULT_GOAL_TOLERANCE_RAD
 from sim.control_loop import ControlLoop
-from wbc.description import JOINT_NAMES
+from wbc.model.description import JOINT_NAMES
 
 #: Longest spin [s of simulated time] before the stand-in gives up.
 SPIN_LIMIT_S = 30.0

@@ -30,9 +30,9 @@ from sim.scene_overlay import (
 )
 from sim.video_recorder import LEGEND_MIN_HEIGHT_PX, LegendStamp, VideoRecorder
 from sim.viewer import ViewerHook
-from wbc.description import FOOT_RADIUS_M, LEGS
-from wbc.errors import ConfigurationError
-from wbc.support_polygon import SupportPolygon
+from wbc.core.errors import ConfigurationError
+from wbc.model.description import FOOT_RADIUS_M, LEGS
+from wbc.model.support_polygon import SupportPolygon
 
 #: Simulated time [s] of the rendered frame: the high five's foot is rising (goal sent at 0).
 FRAME_S = 2.6

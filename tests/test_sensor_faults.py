@@ -12,10 +12,10 @@ from sim.control_loop import ControlLoop
 from sim.mujoco_robot import MujocoRobot
 from sim.sensor_faults import FAULT_KINDS, FaultyRobot, SensorFault
 from sim.simulator import Go2Simulator
-from wbc.control_output import ControlStatus
-from wbc.estimators import DEFAULT_ESTIMATOR
-from wbc.errors import ConfigurationError, UnknownNameError
-from wbc.motor_command import MotorCommand
+from wbc.controller.control_output import ControlStatus
+from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.estimation.estimators import DEFAULT_ESTIMATOR
+from wbc.robot_io.motor_command import MotorCommand
 
 #: Faults start 0.2 s into the hold (times from the goal's start [s]).
 IN_THE_HOLD_S = HOLD_START_S + PUSH_INTO_HOLD_S

@@ -8,13 +8,13 @@ import io
 import numpy as np
 import pytest
 
-from actions.recorded_robot import RecordedRobot
+from actions.robot.recorded_robot import RecordedRobot
 from sim.cli import main
 from sim.control_loop import ControlLoop
 from wbc import WholeBodyController, make_estimator
-from wbc.control_output import ControlStatus
-from wbc.errors import ConfigurationError, UnknownNameError
-from wbc.sensor_log import SensorLog, log_row
+from wbc.controller.control_output import ControlStatus
+from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.robot_io.sensor_log import SensorLog, log_row
 
 
 @pytest.fixture(scope="module")

@@ -9,14 +9,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from actions.robot_interface import MappedRobot
+from actions.robot.robot_interface import MappedRobot
 from sim.mujoco_robot import MujocoRobot
 from sim.sensors import SENSOR_PRESETS, SensorModel, SimulatedSensors, _sample
 from sim.simulator import Go2Simulator
-from wbc.description import LEGS, UNITREE_SDK_JOINT_NAMES, UNITREE_SDK_LEGS
-from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
-from wbc.motor_command import MotorCommand
-from wbc.sensor_record import SensorRecord
+from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
+from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES, UNITREE_SDK_LEGS
+from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.sensor_record import SensorRecord
 
 
 def held(sim: Go2Simulator) -> MotorCommand:

@@ -7,12 +7,12 @@ import pytest
 
 from sim.simulator import Go2Simulator
 from tests.conftest import random_configuration
-from wbc.conventions import mujoco_to_pin
-from wbc.description import FOOT_FRAMES, JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
-from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
-from wbc.joint_map import JointMap
-from wbc.joint_pd_controller import JointPdController
-from wbc.motor_command import MotorCommand
+from wbc.controller.joint_pd_controller import JointPdController
+from wbc.core.conventions import mujoco_to_pin
+from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
+from wbc.model.description import FOOT_FRAMES, JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
+from wbc.model.joint_map import JointMap
+from wbc.robot_io.motor_command import MotorCommand
 
 
 @pytest.fixture(scope="module")

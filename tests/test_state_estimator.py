@@ -17,11 +17,9 @@ from tests.synthetic_records import (
     run,
     started,
 )
-from wbc.description import LEGS
-from wbc.errors import ConfigurationError, UnknownNameError
-from wbc.invariant_ekf import InvariantEkf
-from wbc.sensor_record import SensorRecord
-from wbc.state_estimator import (
+from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.estimation.invariant_ekf import InvariantEkf
+from wbc.estimation.state_estimator import (
     FOOT_SENSOR,
     JOINTS_BAD,
     NO_DATA,
@@ -32,7 +30,9 @@ from wbc.state_estimator import (
     StateEstimator,
     check_sample,
 )
-from wbc.unitree_sdk import SdkLowState, sensor_record_from_message
+from wbc.model.description import LEGS
+from wbc.robot_io.sensor_record import SensorRecord
+from wbc.robot_io.unitree_sdk import SdkLowState, sensor_record_from_message
 
 # ---------------------------------------------------------------------------- statics
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from wbc.support_polygon import MAX_CORNERS, SupportPolygon, shrunk_signed_distance
+from wbc.model.support_polygon import MAX_CORNERS, SupportPolygon, shrunk_signed_distance
 
 #: Feet of a standing GO2 [m], roughly: the corners of the support polygons below.
 STANCE = np.array([[0.19, 0.14], [0.19, -0.14], [-0.19, 0.14], [-0.19, -0.14]])

@@ -13,7 +13,7 @@ from benchmarks.sweep import main, run_sweep
 from benchmarks.sweep_results import SweepResults
 from benchmarks.sweep_runner import RAY_INSTALL, SweepRunner
 from benchmarks.sweep_spec import DIRECTIONS, EpisodeSpec, SweepSpec
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 PROG = "python -m benchmarks.sweep"
 #: The quick sweep's table: 8 N s toward 90 deg is absorbed, toward 315 deg (behind the

@@ -17,7 +17,7 @@ from tasks import (
     RobotKinematics,
 )
 from tests.conftest import random_configuration
-from wbc.errors import ConfigurationError, NonFiniteError
+from wbc.core.errors import ConfigurationError, NonFiniteError
 
 H = 1e-6
 N_SAMPLES = 10

@@ -7,7 +7,7 @@ import pytest
 from actions import messages
 from actions.duration import Duration
 from actions.time import Time
-from wbc.errors import ConfigurationError
+from wbc.core.errors import ConfigurationError
 
 
 def test_to_msg_from_msg_and_seconds_nanoseconds() -> None:

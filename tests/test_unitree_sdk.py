@@ -6,12 +6,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from wbc.control_output import ControlOutput, ControlStatus
-from wbc.description import JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
-from wbc.errors import ConfigurationError, NonFiniteError, UnknownNameError
-from wbc.joint_map import JointMap
-from wbc.motor_command import MotorCommand
-from wbc.unitree_sdk import (
+from wbc.controller.control_output import ControlOutput, ControlStatus
+from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
+from wbc.model.description import JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
+from wbc.model.joint_map import JointMap
+from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.unitree_sdk import (
     MODE_ENABLE,
     MODE_STOP,
     POS_STOP_F,

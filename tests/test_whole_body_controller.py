@@ -11,9 +11,9 @@ from tasks import ContactTask, RobotKinematics
 from tests.conftest import random_configuration
 from wbc import ControllerConfig, WholeBodyController
 from wbc.backends import available_backends
-from wbc.control_output import ControlStatus
-from wbc.description import FOOT_RADIUS_M, LEGS
-from wbc.errors import ConfigurationError, NonFiniteError, ReachabilityError, UnknownNameError
+from wbc.controller.control_output import ControlStatus
+from wbc.core.errors import ConfigurationError, NonFiniteError, ReachabilityError, UnknownNameError
+from wbc.model.description import FOOT_RADIUS_M, LEGS
 
 
 @pytest.fixture(scope="module")
@@ -309,7 +309,7 @@ def _lift_in_lockstep(controllers, model, standing):
 
 def test_reset_prepares_the_raised_foot_layouts_without_changing_any_tick(monkeypatch, model,
                                                                           standing):
-    import wbc.whole_body_controller as module
+    import wbc.controller.whole_body_controller as module
 
     prepared = WholeBodyController()
     prepared.reset(standing)

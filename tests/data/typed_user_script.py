@@ -24,12 +24,12 @@ from wbc import (
     make_estimator,
 )
 
-reveal_type(WholeBodyController)  # expect: -> wbc.whole_body_controller.WholeBodyController
+reveal_type(WholeBodyController)  # expect: -> wbc.controller.whole_body_controller.WholeBodyController
 controller = WholeBodyController(ControllerConfig())
-reveal_type(controller.step)  # expect: -> wbc.control_output.ControlOutput
+reveal_type(controller.step)  # expect: -> wbc.controller.control_output.ControlOutput
 q = Go2Description().pose("standing")
 output: ControlOutput = controller.step(q, np.zeros(18))
-reveal_type(output.status)  # expect: wbc.control_output.ControlStatus
+reveal_type(output.status)  # expect: wbc.controller.control_output.ControlStatus
 controller.step(q)  # type: ignore[call-arg]
 
 reveal_type(ControlLoop.simulated)  # expect: -> sim.control_loop.ControlLoop
@@ -41,8 +41,8 @@ reveal_type(outcome.status)  # expect: actions.goal_status.GoalStatus
 succeeded: bool = outcome.status is GoalStatus.SUCCEEDED
 HighFiveGoal(height=0.3)  # type: ignore[call-arg]
 
-reveal_type(StateEstimator)  # expect: -> wbc.state_estimator.StateEstimator
-reveal_type(InvariantEkf)  # expect: -> wbc.invariant_ekf.InvariantEkf
-reveal_type(make_estimator)  # expect: -> wbc.state_estimator.EstimatorBase
-reveal_type(SensorRecord)  # expect: -> wbc.sensor_record.SensorRecord
+reveal_type(StateEstimator)  # expect: -> wbc.estimation.state_estimator.StateEstimator
+reveal_type(InvariantEkf)  # expect: -> wbc.estimation.invariant_ekf.InvariantEkf
+reveal_type(make_estimator)  # expect: -> wbc.estimation.state_estimator.EstimatorBase
+reveal_type(SensorRecord)  # expect: -> wbc.robot_io.sensor_record.SensorRecord
 reveal_type(available_backends())  # expect: list[str]

@@ -6,7 +6,7 @@ import abc
 from collections.abc import Callable
 
 from wbc.backends.qp_problem import QpProblem, QpResult
-from wbc.errors import UnknownNameError
+from wbc.core.errors import UnknownNameError
 
 
 class QpBackend(abc.ABC):

@@ -1,0 +1,3 @@
+"""The whole-body controller: its configuration, contact modes, QP problem and kernels, motor
+command shaping, and the simpler controllers beside it.
+"""

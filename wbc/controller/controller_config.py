@@ -1,0 +1,194 @@
+"""Every gain, weight, limit and choice of the whole-body controller, validated."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+from typing import ClassVar
+
+import numpy as np
+
+from wbc.core.errors import ConfigurationError, NonFiniteError
+from wbc.core.validation import as_float, known_fields_only
+
+#: ``(low, high, low_inclusive)`` ranges: ``[0, inf]``, that of every numeric field
+#: :attr:`ControllerConfig.RANGES` does not name, and ``(0, inf]``.
+_NON_NEGATIVE = (0.0, None, True)
+_POSITIVE = (0.0, None, False)
+
+
+@known_fields_only("controller parameter")
+@dataclass(frozen=True)
+class ControllerConfig:
+    """Parameters of :class:`wbc.WholeBodyController`; defaults are tuned for the GO2.
+
+    Gains are per task: ``*_kp`` [1/s^2]; damping is critical (``2 sqrt(kp)``).
+    Weights are relative cost weights of the task terms.
+
+    Raises:
+        UnknownNameError: A keyword that is not a field (the message lists the fields).
+        ConfigurationError: A value of the wrong type or out of its range (the message names
+            the field and its range: :attr:`RANGES`, ``[0, inf]`` for the others).
+    """
+
+    #: QP backend name (``wbc.backends.available_backends()`` lists them).
+    backend: str = "daqp"
+    #: Eliminate the floating-base dynamics and the stance contacts (equalities) before the
+    #: solve: the same solution from a QP of about 13 variables instead of 31.
+    eliminate_dynamics: bool = True
+    #: Control period [s]; the controller is meant to run at 1 kHz.
+    control_period_s: float = 1e-3
+    #: Friction coefficient of the contact model (below the floor's, for margin).
+    friction_coefficient: float = 0.6
+    #: Minimum normal force of a loaded stance foot [N].
+    min_normal_force_n: float = 8.0
+    #: Maximum normal force of a stance foot [N].
+    max_normal_force_n: float = 250.0
+    #: Fraction of the URDF effort limits the controller may use (0.9: 10% headroom).
+    torque_limit_fraction: float = 0.9
+    com_kp: float = 150.0
+    com_weight: float = 20.0
+    base_orientation_kp: float = 150.0
+    base_orientation_weight: float = 10.0
+    #: Integral gain of the base orientation [1/s^3], on four loaded feet: pulls the base
+    #: level against joint friction the model does not know. Off (0) by default: the motor
+    #: command's joint PD does that job, and with it the integral made the joints hunt
+    #: (stick-slip at 0.01 to 0.08 rad/s) on dry friction.
+    base_orientation_ki: float = 0.0
+    #: Bound of each component of the orientation error's integral [rad s] (anti-windup).
+    base_orientation_integral_limit: float = 0.02
+    foot_kp: float = 900.0
+    foot_weight: float = 30.0
+    posture_kp: float = 25.0
+    posture_weight: float = 0.1
+    #: Damping of a stance foot's residual velocity [1/s] (stops slip).
+    contact_damping: float = 10.0
+    #: Regularisation of the contact forces (pulls them towards an even split).
+    force_weight: float = 1e-4
+    #: Pull of the accelerations towards the previous tick's (smooth commands).
+    acceleration_rate_weight: float = 1e-3
+    #: Pull of the contact forces towards the previous tick's (smooth commands).
+    force_rate_weight: float = 1e-3
+    #: Cost on the change of joint torques from the previous tick [1/(N m)^2]: smooth
+    #: commands across contact switches.
+    torque_rate_weight: float = 1e-2
+    #: Regularisation of the accelerations (keeps the QP strictly convex).
+    acceleration_weight: float = 1e-6
+    #: Margin of the centre of mass inside the support polygon [m].
+    support_margin_m: float = 0.015
+    #: Natural frequency of the support-polygon barrier [rad/s].
+    support_omega: float = 8.0
+    #: Weight of the support-polygon slack (the constraint is soft).
+    support_slack_weight: float = 1e3
+    #: Horizon over which joint position limits become acceleration bounds [s].
+    joint_limit_horizon_s: float = 0.05
+    #: Joint damping of the safe fallback command [N m s / rad].
+    fallback_damping: float = 2.0
+    # The motor command (see wbc.JointReference): the drivers' PD around the desired joint
+    # state integrated from the QP's accelerations, on top of the QP's torques.
+    #: Position gain of the joints of a stance leg [N m/rad].
+    stance_kp: float = 40.0
+    #: Velocity gain of the joints of a stance leg [N m s/rad].
+    stance_kd: float = 2.0
+    #: Position gain of the joints of a swinging leg [N m/rad].
+    swing_kp: float = 50.0
+    #: Velocity gain of the joints of a swinging leg [N m s/rad].
+    swing_kd: float = 2.0
+    #: Bound of the desired joint positions' distance from the measured ones [rad].
+    reference_position_bound_rad: float = 0.05
+    #: Bound of the desired joint velocities' distance from the measured ones [rad/s].
+    reference_velocity_bound_rad_s: float = 1.0
+    #: Time constant [s] with which a stance leg's desired joint state decays towards the
+    #: measured one (0: no decay, only the bounds). Short: three or four legs closed through
+    #: the floor must not keep a disagreement (it would push the feet apart and make them slide).
+    stance_leak_time_s: float = 0.2
+    #: The same for a swinging leg [s]: long, so the PD keeps up with a lagging joint.
+    swing_leak_time_s: float = 0.5
+    #: Known viscous friction of the joints (hip, thigh, calf) [N m s/rad], added to the
+    #: feed-forward torque along the desired velocity. Zero (the default) compensates none.
+    known_joint_damping: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: Known dry friction of the joints (hip, thigh, calf) [N m], added to the feed-forward
+    #: torque along the desired velocity. Zero (the default) compensates none.
+    known_joint_friction: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: Joint speed [rad/s] over which the dry-friction compensation turns from zero to full
+    #: (a tanh: no chatter at rest).
+    friction_velocity_scale_rad_s: float = 0.05
+
+    #: Fields that hold one value per joint type (hip, thigh, calf).
+    PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ("known_joint_damping", "known_joint_friction")
+    #: ``(low, high, low_inclusive)`` of the numeric fields whose range is not ``[0, inf]``
+    #: (``None``: unbounded); a per-joint-type field's range is that of each of its values.
+    RANGES: ClassVar[dict[str, tuple[float, float | None, bool]]] = {
+        "control_period_s": (1e-4, 0.01, True),
+        "friction_coefficient": (0.0, 5.0, False),
+        "max_normal_force_n": _POSITIVE,
+        "torque_limit_fraction": (0.0, 1.0, False),
+        "joint_limit_horizon_s": _POSITIVE,
+        "support_omega": _POSITIVE,
+        "stance_kp": (0.0, 500.0, True),
+        "stance_kd": (0.0, 50.0, True),
+        "swing_kp": (0.0, 500.0, True),
+        "swing_kd": (0.0, 50.0, True),
+        "known_joint_damping": (0.0, 10.0, True),
+        "known_joint_friction": (0.0, 10.0, True),
+        "friction_velocity_scale_rad_s": _POSITIVE,
+    }
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            if f.name == "backend":
+                if not isinstance(self.backend, str) or not self.backend:
+                    raise ConfigurationError(
+                        f"backend: expected a backend name such as 'daqp' "
+                        f"(wbc.backends.available_backends() lists the installed ones), "
+                        f"received {self.backend!r}")
+            elif f.name == "eliminate_dynamics":
+                if not isinstance(self.eliminate_dynamics, bool):
+                    raise ConfigurationError(f"eliminate_dynamics: expected True or False, "
+                                             f"received {self.eliminate_dynamics!r}")
+            elif f.name in self.PER_JOINT_TYPE:
+                self._check_per_joint_type(f.name)
+            else:
+                _in_range(f.name, getattr(self, f.name), self.RANGES.get(f.name, _NON_NEGATIVE))
+        if self.min_normal_force_n >= self.max_normal_force_n:
+            raise ConfigurationError(
+                f"min_normal_force_n: expected less than max_normal_force_n "
+                f"({self.max_normal_force_n:g} N), received {self.min_normal_force_n:g} N"
+            )
+
+    def _check_per_joint_type(self, name: str) -> None:
+        value = getattr(self, name)
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+            raise ConfigurationError(
+                f"{name}: expected three numbers (hip, thigh, calf), received {value!r}")
+        for joint_type, item in zip(("hip", "thigh", "calf"), value):
+            _in_range(f"{name} ({joint_type})", item, self.RANGES[name])
+        object.__setattr__(self, name, tuple(float(item) for item in value))
+
+
+def _in_range(name: str, value: object, bounds: tuple[float, float | None, bool]) -> None:
+    """Check one number against ``(low, high, low_inclusive)``; every message names the range."""
+    low, high, low_inclusive = bounds
+    interval = f"{'[' if low_inclusive else '('}{low:g}, {'inf' if high is None else f'{high:g}'}]"
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ConfigurationError(f"{name}: expected a number in {interval}, received {value!r}")
+    try:
+        as_float(name, value, low=low, high=high, low_inclusive=low_inclusive)
+    except NonFiniteError:
+        raise NonFiniteError(
+            f"{name}: expected a finite number in {interval}, received {value!r}") from None
+
+
+def config_with_overrides(config: ControllerConfig | None, overrides: dict[str, object]
+                          ) -> ControllerConfig:
+    """``config`` (the defaults when None) with the fields in ``overrides`` changed.
+
+    Raises:
+        ConfigurationError: Keys that are not fields (every one named, the fields listed), or
+            a value out of its range (the field and the range named).
+    """
+    unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
+    if unknown:  # all of them at once (ControllerConfig itself names the first)
+        valid = ", ".join(ControllerConfig.__dataclass_fields__)
+        raise ConfigurationError(
+            f"unknown controller parameter(s) {unknown}; valid controller parameters: {valid}")
+    return replace(config or ControllerConfig(), **overrides)

@@ -1,0 +1,2 @@
+"""Motions a controller is taken through: lifting a leg, moving between poses.
+"""
