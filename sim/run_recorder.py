@@ -77,7 +77,7 @@ class TickRecorder:
         row["estimate_contact"].append(np.ones(len(LEGS)) if estimate is None
                                        else np.array(estimate.contact))
         row["estimate_flags"].append(0 if estimate is None else estimate.flags)
-        if loop.estimator is not None:  # what the estimator read: a sensor log (wbc.robot_io.sensor_log)
+        if loop.estimator is not None:  # what the estimator read (wbc.robot_io.sensor_log)
             for name, value in log_row(loop.estimator.last_sample,
                                        loop.estimator.last_schedule).items():
                 row.setdefault(name, []).append(value)

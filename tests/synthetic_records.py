@@ -7,7 +7,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from wbc.estimation.state_estimator import EstimatorBase, StateEstimate
+from wbc.estimation.state_estimate import StateEstimate
+from wbc.estimation.state_estimator import EstimatorBase
 from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
 from wbc.robot_io.sensor_record import SensorRecord
 

@@ -60,7 +60,8 @@ def test_lying_pose_inside_limits_with_feet_on_ground(description):
 
 
 def test_unknown_pose_lists_valid_names(description):
-    with pytest.raises(UnknownNameError, match="unknown pose 'sitting'; valid poses: standing, lying"):
+    with pytest.raises(UnknownNameError,
+                       match="unknown pose 'sitting'; valid poses: standing, lying"):
         description.pose("sitting")
 
 
@@ -87,7 +88,7 @@ def test_missing_distribution_says_what_to_install(monkeypatch):
 def test_distribution_without_go2_files(monkeypatch):
     class Empty:
         version = "0.0"
-        files = []
+        files = ()
 
     monkeypatch.setattr(desc_module.importlib.metadata, "distribution", lambda name: Empty())
     desc_module._installed_go2_folder.cache_clear()

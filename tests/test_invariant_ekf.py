@@ -22,7 +22,7 @@ from tests.synthetic_records import (
 )
 from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
 from wbc.estimation.invariant_ekf import InvariantEkf, InvariantEkfConfig
-from wbc.estimation.state_estimator import (
+from wbc.estimation.state_estimate import (
     ACCEL_BAD,
     GYRO_BAD,
     JOINTS_BAD,
@@ -30,8 +30,8 @@ from wbc.estimation.state_estimator import (
     QUATERNION_NON_FINITE,
     QUATERNION_TIMEOUT,
     STALE,
-    StateEstimator,
 )
+from wbc.estimation.state_estimator import StateEstimator
 from wbc.model.leg_kinematics import LegKinematics
 from wbc.robot_io.sensor_record import SensorRecord
 

@@ -35,7 +35,8 @@ def test_aliases():
 def test_unknown_name_lists_valid_ones():
     names = list(JOINT_NAMES)
     names[4] = "FR_knee_joint"
-    with pytest.raises(UnknownNameError, match="unknown joint 'FR_knee_joint'; valid joints: FL_hip_joint"):
+    with pytest.raises(UnknownNameError,
+                       match="unknown joint 'FR_knee_joint'; valid joints: FL_hip_joint"):
         JointMap(names)
 
 
@@ -47,5 +48,6 @@ def test_duplicate_and_count_errors():
 
 
 def test_wrong_shape_says_expected_shape():
-    with pytest.raises(ConfigurationError, match=r"expected an array of shape \(12,\), received shape \(11,\)"):
+    with pytest.raises(ConfigurationError,
+                       match=r"expected an array of shape \(12,\), received shape \(11,\)"):
         JointMap.unitree_sdk().to_other(np.zeros(11))

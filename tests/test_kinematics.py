@@ -1,4 +1,4 @@
-"""RobotKinematics against Pinocchio at random states, and its derivatives against finite differences."""
+"""RobotKinematics against Pinocchio at random states; its derivatives by finite differences."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from numba.core.runtime import _nrt_python, rtsys
 
 from wbc.core.errors import ConfigurationError, NonFiniteError
-from wbc.model import kinematics as kinematics_module
+from wbc.model import kinematics_kernels as kinematics_module
 from wbc.model.kinematics import RobotKinematics
 
 FRAMES = ("FL_foot", "FR_foot", "RL_foot", "RR_foot", "base", "FR_calf", "universe")

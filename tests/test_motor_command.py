@@ -18,8 +18,8 @@ def test_torque_is_the_driver_law():
     rng = np.random.default_rng(3)
     cmd = random_command(rng)
     q, dq = rng.normal(size=12), rng.normal(size=12)
-    expected = [cmd.tau_ff[i] + cmd.kp[i] * (cmd.q_des[i] - q[i]) + cmd.kd[i] * (cmd.dq_des[i] - dq[i])
-                for i in range(12)]
+    expected = [cmd.tau_ff[i] + cmd.kp[i] * (cmd.q_des[i] - q[i])
+                + cmd.kd[i] * (cmd.dq_des[i] - dq[i]) for i in range(12)]
     np.testing.assert_allclose(cmd.torque_at(q, dq), expected, rtol=1e-12)
     limit = np.full(12, 2.0)
     np.testing.assert_allclose(cmd.clipped_torque_at(q, dq, limit), np.clip(expected, -2.0, 2.0))

@@ -18,21 +18,21 @@ from tests.synthetic_records import (
     started,
 )
 from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.estimation.estimator_config import EstimatorConfig
 from wbc.estimation.invariant_ekf import InvariantEkf
-from wbc.estimation.state_estimator import (
+from wbc.estimation.shared_kernels import check_sample
+from wbc.estimation.state_estimate import (
     FOOT_SENSOR,
     JOINTS_BAD,
     NO_DATA,
     QUATERNION_NON_FINITE,
     QUATERNION_NOT_UNIT,
     STALE,
-    EstimatorConfig,
-    StateEstimator,
-    check_sample,
 )
+from wbc.estimation.state_estimator import StateEstimator
 from wbc.model.description import LEGS
+from wbc.robot_io.sdk_low_state import SdkLowState, sensor_record_from_message
 from wbc.robot_io.sensor_record import SensorRecord
-from wbc.robot_io.unitree_sdk import SdkLowState, sensor_record_from_message
 
 # ---------------------------------------------------------------------------- statics
 

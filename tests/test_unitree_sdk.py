@@ -11,15 +11,14 @@ from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
 from wbc.model.description import JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
 from wbc.model.joint_map import JointMap
 from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.sdk_low_state import SdkLowState, sensor_record_from_message
+from wbc.robot_io.sdk_motor_command import SdkMotorCommand
 from wbc.robot_io.unitree_sdk import (
     MODE_ENABLE,
     MODE_STOP,
     POS_STOP_F,
     SDK_MOTOR_SLOTS,
     VEL_STOP_F,
-    SdkLowState,
-    SdkMotorCommand,
-    sensor_record_from_message,
 )
 
 S = np.sqrt(0.5)  # cos(45 deg) = sin(45 deg)

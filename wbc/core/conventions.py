@@ -14,6 +14,8 @@ import numpy as np
 from wbc.core.validation import as_vector
 
 NQ, NV = 19, 18
+#: Gravity [m/s^2], Pinocchio's default: what an accelerometer at rest reads, upwards.
+GRAVITY_M_S2 = 9.81
 
 
 def reorder_quaternion(quat: np.ndarray, *, to: str) -> np.ndarray:

@@ -58,9 +58,9 @@ def quat_normalize(quat):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def quat_rotation(quat, out):  # pragma: no cover - compiled
-    """``out`` (3, 3) = the rotation matrix of the unit quaternion ``quat``."""
-    w, x, y, z = quat[0], quat[1], quat[2], quat[3]
+def rotation_from_wxyz(w, x, y, z, out):  # pragma: no cover - compiled
+    """``out`` (3, 3) = the rotation matrix of the quaternion ``(w, x, y, z)``, not normalised
+    (Eigen's and so Pinocchio's: a non-unit quaternion gives what they give)."""
     out[0, 0] = 1.0 - 2.0 * (y * y + z * z)
     out[0, 1] = 2.0 * (x * y - z * w)
     out[0, 2] = 2.0 * (x * z + y * w)
@@ -70,6 +70,12 @@ def quat_rotation(quat, out):  # pragma: no cover - compiled
     out[2, 0] = 2.0 * (x * z - y * w)
     out[2, 1] = 2.0 * (y * z + x * w)
     out[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+
+
+@numba.njit(cache=True)
+def quat_rotation(quat, out):  # pragma: no cover - compiled
+    """``out`` (3, 3) = the rotation matrix of the unit quaternion ``quat``."""
+    rotation_from_wxyz(quat[0], quat[1], quat[2], quat[3], out)
 
 
 @numba.njit(cache=True)

@@ -1,4 +1,4 @@
-"""Input checks shared by the library: shapes, finiteness and ranges, with messages that name the field."""
+"""Input checks shared by the library: shapes, finiteness, ranges; each message names the field."""
 
 from __future__ import annotations
 
@@ -81,6 +81,20 @@ def as_float(name: str, value: Any, *, low: float | None = None, high: float | N
             f"{name}: expected a value in {bracket}{lo}, {hi}], received {number:g}"
         )
     return number
+
+
+def as_whole_number(name: str, value: Any, meaning: str) -> int:
+    """Return ``value`` as an ``int`` if it is a whole number (Python's or NumPy's, not a
+    ``bool``).
+
+    Raises:
+        ConfigurationError: Anything else; the message says what the number is
+            (``meaning``).
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ConfigurationError(
+            f"{name}: expected a whole number ({meaning}), received {value!r}")
+    return int(value)
 
 
 def check_name(kind: str, name: str, valid: Iterable[str]) -> str:

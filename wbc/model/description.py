@@ -1,4 +1,4 @@
-"""The GO2 description: joint names and order, feet, named poses and limits, from example-robot-data."""
+"""The GO2 description from example-robot-data: joint names and order, feet, named poses, limits."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The GO2's low-level motor command: desired position and velocity, PD gains, feed-forward torque."""
+"""The GO2's motor command: desired joint position and velocity, PD gains, feed-forward torque."""
 
 from __future__ import annotations
 

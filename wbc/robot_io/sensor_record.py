@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_whole_number
 
 #: Field name -> shape of the record's arrays.
 ARRAY_FIELDS: dict[str, int] = {
@@ -80,10 +81,7 @@ class SensorRecord:
                                                                          np.number)):
             raise ConfigurationError(f"stamp_s: expected a time [s], received {self.stamp_s!r}")
         self.stamp_s = float(self.stamp_s)
-        if isinstance(self.tick, bool) or not isinstance(self.tick, (int, np.integer)):
-            raise ConfigurationError(
-                f"tick: expected a whole number (the sample counter), received {self.tick!r}")
-        self.tick = int(self.tick)
+        self.tick = as_whole_number("tick", self.tick, "the sample counter")
         for name, size in ARRAY_FIELDS.items():
             setattr(self, name, _array(name, getattr(self, name), size))
 

@@ -1,0 +1,149 @@
+"""The estimators' numbers: what they share (:class:`SensorTrustConfig`) and the linear filter's.
+
+Each estimator's compiled tick reads its config as one vector: the config class's own
+``_PARAMS``, then :data:`CONTACT_PARAMS` (the shared contact fusion's, read from the end by
+:func:`wbc.estimation.shared_kernels.legs_and_contacts`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import ClassVar
+
+import numpy as np
+
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, known_fields_only
+from wbc.model.description import FOOT_RADIUS_M
+
+
+@dataclass(frozen=True)
+class SensorTrustConfig:
+    """What every estimator here shares: which readings it trusts, how it weighs the feet.
+
+    Attributes:
+        quaternion_tolerance: Largest ``| |quat| - 1 |`` of a quaternion taken as unit.
+        quaternion_timeout_s: Time [s] on the gyroscope alone before the orientation is
+            no longer trusted (an estimator whose orientation needs no quaternion ignores
+            it).
+        foot_position_noise_m: Noise of a foot's position from the kinematics [m].
+        swing_noise_scale: How much a foot's measurement noise grows at zero contact weight.
+        min_contact_weight: Below this weight a foot follows the kinematics freely.
+        full_trust_force_n: A stance foot whose normal-force bound [N] is at least this
+            has the schedule's full weight (the bound ramps down as a foot is unloaded).
+        use_foot_force: Fuse the foot-force counts with the schedule (off: schedule only,
+            for robots or simulators without foot sensors).
+        foot_force_on: Count above which a foot turns to contact.
+        foot_force_off: Count below which it turns to no contact.
+        foot_force_full_scale: The sensor's highest count: a reading there is saturated.
+        foot_sensor_stuck_s: A stance foot's sensor whose count does not change for this
+            long [s] is stuck (a loaded foot's live sensor always changes: its load and its
+            noise do).
+        foot_sensor_recover_s: It is trusted again after this long [s] of changing,
+            in-range readings.
+        trust_timeout_s: Time [s] without a trustworthy sample (fresh, finite joints and
+            gyroscope) after which the estimate is not usable and the loop sends the
+            controller's safe command.
+        foot_radius_m: Radius of the foot spheres [m].
+    """
+
+    #: Valid range of each of the subclass's own numeric fields (low exclusive unless 0).
+    _RANGES: ClassVar[dict[str, tuple[float, float]]] = {}
+    #: The numbers the subclass's kernel reads, in its order.
+    _PARAMS: ClassVar[tuple[str, ...]] = ()
+
+    quaternion_tolerance: float = 0.01
+    quaternion_timeout_s: float = 1.0
+    foot_position_noise_m: float = 2e-3
+    swing_noise_scale: float = 100.0
+    min_contact_weight: float = 0.02
+    full_trust_force_n: float = 30.0
+    use_foot_force: bool = True
+    foot_force_on: float = 60.0
+    foot_force_off: float = 40.0
+    foot_force_full_scale: float = 1000.0
+    foot_sensor_stuck_s: float = 0.05
+    foot_sensor_recover_s: float = 0.5
+    trust_timeout_s: float = 0.01
+    foot_radius_m: float = FOOT_RADIUS_M
+
+    def __post_init__(self) -> None:
+        for name, (low, high) in {**_SHARED_RANGES, **self._RANGES}.items():
+            as_float(name, getattr(self, name), low=low, high=high, low_inclusive=low == 0.0)
+        if not isinstance(self.use_foot_force, bool):
+            raise ConfigurationError(
+                f"use_foot_force: expected true or false, received {self.use_foot_force!r}")
+        if self.foot_force_off >= self.foot_force_on:
+            raise ConfigurationError(
+                f"foot_force_off: expected less than foot_force_on ({self.foot_force_on:g}), "
+                f"received {self.foot_force_off:g}")
+        if self.foot_force_full_scale <= self.foot_force_on:
+            raise ConfigurationError(
+                f"foot_force_full_scale: expected more than foot_force_on "
+                f"({self.foot_force_on:g}), received {self.foot_force_full_scale:g}")
+
+    @classmethod
+    def field_names(cls) -> tuple[str, ...]:
+        """Every field's name."""
+        return tuple(f.name for f in fields(cls))
+
+    def _vector(self) -> np.ndarray:
+        """The kernel's numbers: the subclass's ``_PARAMS``, then :data:`CONTACT_PARAMS`."""
+        return np.array([getattr(self, name) for name in (*self._PARAMS, *CONTACT_PARAMS)],
+                        dtype=float)
+
+
+#: The contact fusion's fields, the last of every estimator's kernel vector, in this order.
+CONTACT_PARAMS = ("full_trust_force_n", "use_foot_force", "foot_force_on", "foot_force_off",
+                  "foot_force_full_scale", "foot_sensor_stuck_s", "foot_sensor_recover_s")
+
+#: Valid range of each shared numeric field (a 0 lower bound is inclusive, others exclusive).
+_SHARED_RANGES: dict[str, tuple[float, float]] = {
+    "quaternion_tolerance": (1e-6, 0.5), "quaternion_timeout_s": (1e-3, 60.0),
+    "foot_position_noise_m": (1e-9, 1.0), "swing_noise_scale": (1.0, 1e6),
+    "min_contact_weight": (0.0, 1.0), "full_trust_force_n": (1e-3, 1e4),
+    "foot_force_on": (-32768.0, 32767.0), "foot_force_off": (-32768.0, 32767.0),
+    "foot_force_full_scale": (-32768.0, 32767.0), "foot_sensor_stuck_s": (1e-3, 10.0),
+    "foot_sensor_recover_s": (0.0, 60.0), "trust_timeout_s": (0.0, 10.0),
+    "foot_radius_m": (0.0, 0.1),
+}
+
+
+@known_fields_only("estimator parameter")
+@dataclass(frozen=True)
+class EstimatorConfig(SensorTrustConfig):
+    """Every number of the linear estimator, validated (an error names the field and its
+    range); the shared ones are :class:`SensorTrustConfig`'s.
+
+    Attributes:
+        orientation_time_constant_s: How fast [s] the orientation follows the IMU's
+            quaternion (the gyroscope carries it in between).
+        gyro_bias_time_constant_s: How fast [s] the gyroscope bias is learnt from it.
+        position_process_noise: Random walk of the IMU's position [m/sqrt(s)].
+        velocity_process_noise: Of its velocity (what the accelerometer misses)
+            [m/s/sqrt(s)].
+        foot_process_noise: Of a stance foot's position (slip, rolling the model misses)
+            [m/sqrt(s)].
+        foot_velocity_noise_m_s: Noise of the body's velocity from a stance foot [m/s].
+        foot_height_noise_m: Noise of a stance foot's height above the floor [m].
+    """
+
+    _RANGES: ClassVar[dict[str, tuple[float, float]]] = {
+        "orientation_time_constant_s": (1e-4, 100.0), "gyro_bias_time_constant_s": (1e-3, 1e4),
+        "position_process_noise": (1e-9, 10.0), "velocity_process_noise": (1e-9, 100.0),
+        "foot_process_noise": (1e-9, 10.0), "foot_velocity_noise_m_s": (1e-9, 10.0),
+        "foot_height_noise_m": (1e-9, 1.0),
+    }
+    _PARAMS: ClassVar[tuple[str, ...]] = (
+        "orientation_time_constant_s", "gyro_bias_time_constant_s", "quaternion_tolerance",
+        "quaternion_timeout_s", "position_process_noise", "velocity_process_noise",
+        "foot_process_noise", "foot_position_noise_m", "foot_velocity_noise_m_s",
+        "foot_height_noise_m", "swing_noise_scale", "min_contact_weight", "foot_radius_m")
+
+    orientation_time_constant_s: float = 0.05
+    gyro_bias_time_constant_s: float = 10.0
+    position_process_noise: float = 1e-3
+    velocity_process_noise: float = 0.1
+    foot_process_noise: float = 1e-3
+    foot_velocity_noise_m_s: float = 0.03
+    foot_height_noise_m: float = 2e-3

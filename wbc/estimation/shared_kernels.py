@@ -1,0 +1,315 @@
+"""The compiled pieces every estimator's tick shares: the sample's checks, the trust clock, the
+feet's contact weights and motion, the starting pose and the controller's ``(q, v)``.
+
+So both estimators read a sample, weigh a foot and report a fault the same way, and differ
+only in their filters (:mod:`wbc.estimation.state_estimator_kernels`,
+:mod:`wbc.estimation.invariant_ekf_kernels`). Nothing here allocates.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+from wbc.core.quaternion_kernels import quat_multiply, quat_normalize, quat_rotation, quat_yaw
+from wbc.estimation.state_estimate import (
+    ACCEL_BAD,
+    FOOT_NON_FINITE,
+    FOOT_OK,
+    FOOT_REASON_SHIFT,
+    FOOT_SATURATED,
+    FOOT_SENSOR,
+    FOOT_STUCK,
+    GYRO_BAD,
+    JOINTS_BAD,
+    NO_DATA,
+    QUATERNION_NON_FINITE,
+    QUATERNION_NOT_UNIT,
+    STALE,
+    UNTRUSTED,
+)
+from wbc.model.leg_kinematics import leg_kinematics
+
+#: Scratch space of :func:`start_pose` [floats].
+START_WORK_SIZE = 49
+
+@numba.njit(cache=True)
+def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock,
+                 dt_nominal, quat_tol):  # pragma: no cover - compiled
+    """Which parts of this tick's sample can be used; the time step.
+
+    Args:
+        fresh: A sample arrived (``False``: none this period).
+        tick, stamp_s: Its counter and stamp [s].
+        quat_in, gyro_in, accel_in, q_in, dq_in: Its IMU and joint readings.
+        clock: In/out: ``(last tick, last stamp [s], untrusted time [s], time predicted
+            since the last sample [s])``.
+        dt_nominal: The control period [s], used when the stamps do not give the step.
+        quat_tol: Largest ``| |quat| - 1 |`` of a usable quaternion.
+
+    Returns:
+        ``(flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok)``: the fault flags so far,
+        the time step [s], a new sample (not repeated), and each part's usability.
+    """
+    flags = 0
+    dt = dt_nominal
+    new = fresh
+    if not fresh:
+        flags |= NO_DATA
+    elif tick == clock[0]:
+        flags |= STALE
+        new = False
+    if new:
+        # The step from the last sample, less what was predicted since without one.
+        elapsed = stamp_s - clock[1]
+        if 0.0 < elapsed < 0.1:
+            dt = max(0.0, elapsed - clock[3])
+        clock[0] = tick
+        clock[1] = stamp_s
+        clock[3] = 0.0
+    else:
+        clock[3] += dt
+    joints_ok = new
+    if new:
+        for j in range(12):
+            if not (math.isfinite(q_in[j]) and math.isfinite(dq_in[j])):
+                joints_ok = False
+        if not joints_ok:
+            flags |= JOINTS_BAD
+    gyro_ok = new and math.isfinite(gyro_in[0]) and math.isfinite(gyro_in[1]) and \
+        math.isfinite(gyro_in[2])
+    if new and not gyro_ok:
+        flags |= GYRO_BAD
+    accel_ok = new and math.isfinite(accel_in[0]) and math.isfinite(accel_in[1]) and \
+        math.isfinite(accel_in[2])
+    if new and not accel_ok:
+        flags |= ACCEL_BAD
+    quat_ok = False
+    if new:
+        norm = math.sqrt(quat_in[0] ** 2 + quat_in[1] ** 2 + quat_in[2] ** 2 + quat_in[3] ** 2)
+        if not math.isfinite(norm):
+            flags |= QUATERNION_NON_FINITE
+        elif abs(norm - 1.0) > quat_tol:
+            flags |= QUATERNION_NOT_UNIT
+        else:
+            quat_ok = True
+    return flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok
+
+
+@numba.njit(cache=True)
+def account_trust(flags, dt, clock):  # pragma: no cover - compiled
+    """Add ``dt`` [s] to the untrusted time ``clock[2]`` if the tick's flags make it
+    untrustworthy, else reset it."""
+    if flags & UNTRUSTED:
+        clock[2] += dt
+    else:
+        clock[2] = 0.0
+
+
+@numba.njit(cache=True)
+def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on, force_off,
+                    force_full, stuck_s, recover_s, foot_contact, foot_same_s, foot_good_s,
+                    foot_reason, foot_last, weight):  # pragma: no cover - compiled
+    """Each foot's contact weight: the schedule, fused with its foot-force sensor.
+
+    The schedule's weight is the foot's normal-force bound over ``full_force`` (clipped to
+    [0, 1]); the sensor's verdict is a hysteresis between ``force_off`` and ``force_on``
+    counts. A sensor at full scale, non-finite, or (on a scheduled stance foot) repeating
+    one reading for ``stuck_s`` [s] is distrusted until it has read changing, in-range
+    values for ``recover_s`` [s]; the schedule alone then decides for that foot.
+
+    Returns:
+        :data:`FOOT_SENSOR` if a foot sensor is distrusted, else 0, with each foot's reason
+        in two bits from :data:`FOOT_REASON_SHIFT`. ``foot_*`` are the sensors' state
+        (in/out), ``weight`` (4,) the output.
+    """
+    flags = 0
+    for i in range(4):
+        scheduled = min(1.0, max(0.0, schedule[i] / full_force))
+        if new:
+            value = force_in[i]
+            if not math.isfinite(value):
+                foot_reason[i] = FOOT_NON_FINITE
+                foot_good_s[i] = 0.0
+            else:
+                # A loaded foot's live sensor never repeats a reading for long (its load and
+                # its noise change it); a foot in the air may well read a steady zero load.
+                if value == foot_last[i] and scheduled > 0.0:
+                    foot_same_s[i] += dt
+                else:
+                    foot_same_s[i] = 0.0
+                foot_last[i] = value
+                if value >= force_full:
+                    foot_reason[i] = FOOT_SATURATED
+                    foot_good_s[i] = 0.0
+                elif foot_same_s[i] >= stuck_s:
+                    foot_reason[i] = FOOT_STUCK
+                    foot_good_s[i] = 0.0
+                elif foot_reason[i] != FOOT_OK:
+                    foot_good_s[i] += dt
+                    if foot_good_s[i] >= recover_s:
+                        foot_reason[i] = FOOT_OK
+                if value > force_on:
+                    foot_contact[i] = 1.0
+                elif value < force_off:
+                    foot_contact[i] = 0.0
+        if foot_reason[i] != FOOT_OK:
+            flags |= FOOT_SENSOR | (foot_reason[i] << (FOOT_REASON_SHIFT + 2 * i))
+        if use_force and foot_reason[i] == FOOT_OK:
+            weight[i] = scheduled * foot_contact[i]
+        else:
+            weight[i] = scheduled
+    return flags
+
+
+@numba.njit(cache=True)
+def legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params, rotations,
+                      translations, axes, foot_offsets, foot_position, foot_jacobian,
+                      foot_angular_jacobian, legs_work, joint_q, joint_dq, foot_contact,
+                      foot_same_s, foot_good_s, foot_reason, foot_last,
+                      weight):  # pragma: no cover - compiled
+    """The joints (kept when usable), the legs' kinematics and each foot's contact weight
+    (:func:`contact_weights`); the contact flags.
+
+    ``params`` is the estimator's config vector; the contact fields are read from its end
+    (:data:`CONTACT_PARAMS`, every estimator's config ends with them in that order).
+    """
+    if joints_ok:
+        for j in range(12):
+            joint_q[j] = q_in[j]
+            joint_dq[j] = dq_in[j]
+        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
+                       foot_jacobian, foot_angular_jacobian, legs_work)
+    end = params.shape[0]
+    return contact_weights(new, dt, force_in, schedule, params[end - 7], params[end - 6] > 0.5,
+                           params[end - 5], params[end - 4], params[end - 3], params[end - 2],
+                           params[end - 1], foot_contact, foot_same_s, foot_good_s,
+                           foot_reason, foot_last, weight)
+
+
+@numba.njit(cache=True)
+def foot_motion(rotation, omega, joint_dq, origin, foot_position, foot_jacobian,
+                foot_angular_jacobian, radius, relative, velocity, rolling,
+                work):  # pragma: no cover - compiled
+    """Each foot's kinematics in the world's orientation, relative to a point of the base.
+
+    Args:
+        rotation: The base's orientation ``R_world_base`` (3, 3).
+        omega: The base's angular velocity, base frame [rad/s].
+        joint_dq: Joint velocities [rad/s] (12,), description order.
+        origin: The point of the base [m] (the IMU), base frame.
+        foot_position, foot_jacobian, foot_angular_jacobian: :class:`LegKinematics`' outputs.
+        radius: The foot spheres' radius [m].
+        relative: Out (4, 3): each foot centre minus the point, world orientation [m].
+        velocity: Out (4, 3): the point's world velocity [m/s] if the foot's sphere rolls
+            on the floor without slipping.
+        rolling: Out (4, 3): the foot centre's world velocity as its sphere rolls
+            (``omega_foot x (0, 0, radius)``) [m/s].
+        work: Scratch space (4, 3).
+    """
+    body, spin, rel_v, world_spin = work[0], work[1], work[2], work[3]
+    for i in range(4):
+        for r in range(3):
+            body[r] = foot_position[i, r] - origin[r]
+        for r in range(3):
+            relative[i, r] = (rotation[r, 0] * body[0] + rotation[r, 1] * body[1]
+                              + rotation[r, 2] * body[2])
+        # The foot centre's velocity relative to the point, base frame: omega x body + J dq.
+        rel_v[0] = omega[1] * body[2] - omega[2] * body[1]
+        rel_v[1] = omega[2] * body[0] - omega[0] * body[2]
+        rel_v[2] = omega[0] * body[1] - omega[1] * body[0]
+        for r in range(3):
+            spin[r] = omega[r]
+            for k in range(3):
+                rel_v[r] += foot_jacobian[i, r, k] * joint_dq[3 * i + k]
+                spin[r] += foot_angular_jacobian[i, r, k] * joint_dq[3 * i + k]
+        for r in range(3):
+            world_spin[r] = (rotation[r, 0] * spin[0] + rotation[r, 1] * spin[1]
+                             + rotation[r, 2] * spin[2])
+        rolling[i, 0] = world_spin[1] * radius
+        rolling[i, 1] = -world_spin[0] * radius
+        rolling[i, 2] = 0.0
+        for r in range(3):
+            velocity[i, r] = rolling[i, r] - (rotation[r, 0] * rel_v[0]
+                                              + rotation[r, 1] * rel_v[1]
+                                              + rotation[r, 2] * rel_v[2])
+
+
+@numba.njit(cache=True)
+def write_outputs(rotation, quat, omega, px, py, pz, vx, vy, vz, imu_offset, joint_q, joint_dq,
+                  q_out, v_out, work):  # pragma: no cover - compiled
+    """The controller's ``(q, v)`` from the IMU site's world position ``(px, py, pz)`` and
+    velocity ``(vx, vy, vz)``, the orientation (``rotation`` and ``quat`` as w, x, y, z), the
+    body angular velocity and the joints (Pinocchio's conventions); ``work``: scratch (3, 3)."""
+    offset, spin, base = work[0], work[1], work[2]
+    for r in range(3):
+        offset[r] = (rotation[r, 0] * imu_offset[0] + rotation[r, 1] * imu_offset[1]
+                     + rotation[r, 2] * imu_offset[2])
+        spin[r] = (rotation[r, 0] * omega[0] + rotation[r, 1] * omega[1]
+                   + rotation[r, 2] * omega[2])
+    # v_base = v_imu - omega_world x offset_world, then into the base frame.
+    base[0] = vx - (spin[1] * offset[2] - spin[2] * offset[1])
+    base[1] = vy - (spin[2] * offset[0] - spin[0] * offset[2])
+    base[2] = vz - (spin[0] * offset[1] - spin[1] * offset[0])
+    q_out[0] = px - offset[0]
+    q_out[1] = py - offset[1]
+    q_out[2] = pz - offset[2]
+    for r in range(3):
+        v_out[r] = rotation[0, r] * base[0] + rotation[1, r] * base[1] + rotation[2, r] * base[2]
+        v_out[3 + r] = omega[r]
+    q_out[3], q_out[4], q_out[5], q_out[6] = quat[1], quat[2], quat[3], quat[0]
+    for j in range(12):
+        q_out[7 + j] = joint_q[j]
+        v_out[6 + j] = joint_dq[j]
+
+
+@numba.njit(cache=True)
+def start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, imu_offset, rotations,
+               translations, axes, foot_offsets, foot_position, foot_jacobian,
+               foot_angular_jacobian, align, quat, imu_position, feet,
+               work):  # pragma: no cover - compiled
+    """Where an estimator starts: on four loaded feet, the base at ``(base_x, base_y)`` [m].
+
+    The orientation is the IMU's quaternion ``quat_in`` (w, x, y, z; normalised here) turned
+    to yaw 0 unless ``keep_yaw``; the height puts the feet's sphere centres (``radius`` [m])
+    on a flat floor at z = 0, on average.
+
+    Args:
+        quat_in, q_in: The first sample's quaternion and joint angles [rad] (12,).
+        imu_offset, rotations, ..., foot_angular_jacobian: :class:`LegKinematics`' arrays
+            (its outputs are filled for ``q_in``).
+        align: Out (4,): the yaw alignment, ``quat = align * quat_in / |quat_in|``.
+        quat: Out (4,): the orientation (w, x, y, z).
+        imu_position: Out (3,): the IMU site's world position [m].
+        feet: Out (4, 3): the foot centres' world positions [m].
+        work: Scratch space (:data:`START_WORK_SIZE`).
+    """
+    measured = work[0:4]
+    rotation = work[4:13].reshape((3, 3))
+    legs_work = work[13:49].reshape((4, 3, 3))
+    norm = math.sqrt(quat_in[0] ** 2 + quat_in[1] ** 2 + quat_in[2] ** 2 + quat_in[3] ** 2)
+    for k in range(4):
+        measured[k] = quat_in[k] / norm
+    yaw = 0.0 if keep_yaw else quat_yaw(measured)
+    align[0], align[1], align[2], align[3] = math.cos(-0.5 * yaw), 0.0, 0.0, math.sin(-0.5 * yaw)
+    quat_multiply(align, measured, quat)
+    quat_normalize(quat)
+    quat_rotation(quat, rotation)
+    leg_kinematics(q_in, rotations, translations, axes, foot_offsets, foot_position,
+                   foot_jacobian, foot_angular_jacobian, legs_work)
+    height = 0.0
+    for i in range(4):
+        height += radius - (rotation[2, 0] * foot_position[i, 0]
+                            + rotation[2, 1] * foot_position[i, 1]
+                            + rotation[2, 2] * foot_position[i, 2])
+    height /= 4.0
+    for r in range(3):
+        base = base_x if r == 0 else (base_y if r == 1 else height)
+        imu_position[r] = base + (rotation[r, 0] * imu_offset[0]
+                                  + rotation[r, 1] * imu_offset[1]
+                                  + rotation[r, 2] * imu_offset[2])
+        for i in range(4):
+            feet[i, r] = base + (rotation[r, 0] * foot_position[i, 0]
+                                 + rotation[r, 1] * foot_position[i, 1]
+                                 + rotation[r, 2] * foot_position[i, 2])
