@@ -26,7 +26,7 @@ class BaseHeightTask(Task):
         self._set_reference("BaseHeightTask", [height_m], [velocity_m_s])
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        # Write in place: the controller stacked these arrays into its QP blocks.
+        # Write in place: these are views of the task's block of the QP (replacing one raises).
         i = self.frame_indices[0]
         self.error[0] = self.reference[0, 0] - kinematics.frame_position[i, 2]
         self.error_rate[0] = self.reference[1, 0] - kinematics.frame_velocity[i, 2]

@@ -9,6 +9,7 @@ import pinocchio as pin
 
 from tasks import task_kernels
 from tasks.task import Task
+from tasks.task_block import InPlace, TaskBlock
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_vector
 
@@ -25,15 +26,21 @@ class BaseOrientationTask(Task):
     """
 
     dim = 3
+    #: Target rotation ``R_world_base`` (updated in place: the compiled kernel reads it).
+    rotation = InPlace()
+    #: Added to the desired angular acceleration [rad/s^2] (a controller's integral term;
+    #: written in place).
+    bias = InPlace()
 
-    def __init__(self, *, kp: float = 100.0, kd: float | None = None, weight: float = 5.0):
-        super().__init__(kp=kp, kd=kd, weight=weight)
-        #: Target rotation ``R_world_base`` (updated in place).
-        self.rotation = np.eye(3)
+    def __init__(self, *, kp: float = 100.0, kd: float | None = None, weight: float = 5.0,
+                 nv: int | None = None):
+        self.__dict__["_rotation"] = np.eye(3)
+        self.__dict__["_bias"] = np.zeros(3)
+        super().__init__(kp=kp, kd=kd, weight=weight, nv=nv)
         self._has_target = True
-        self.jacobian[:, 3:6] = np.eye(3)
-        #: Added to the desired angular acceleration [rad/s^2] (a controller's integral term).
-        self.bias = np.zeros(3)
+
+    def setup(self, block: TaskBlock) -> None:
+        block.jacobian[:, 3:6] = np.eye(3)  # the base's angular velocity, v[3:6]
 
     def set_target(self, rotation: np.ndarray) -> None:
         """Set the target rotation ``R_world_base`` (3x3, orthonormal); copies it."""

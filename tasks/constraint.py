@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -36,6 +37,20 @@ class ConstraintBlock:
     rows: slice
 
 
+class Elimination(enum.Enum):
+    """Equality rows a problem builder may eliminate exactly before the solve, with the
+    contacts' :class:`tasks.ContactTask` (``J_c``, drift, desired) and the robot's dynamics
+    (``M``, ``h``): every decision variable then follows from the free ones, ``x = T z + t0``
+    (:mod:`wbc.controller.qp_kernel`). A constraint that declares one promises that its rows
+    are exactly these, for the contacts with force variables of its ``contacts`` task.
+    """
+
+    #: ``M_u qdd + h_u = J_u^T f``: the six unactuated rows of the equations of motion.
+    FLOATING_BASE_DYNAMICS = "floating-base dynamics"
+    #: ``J_c qdd = desired - drift`` for each contact with force variables (3 rows each).
+    STANCE_CONTACTS = "stance contacts"
+
+
 class Constraint:
     """Linear rows on the decision vector ``x`` of :class:`tasks.VariableLayout`.
 
@@ -44,6 +59,12 @@ class Constraint:
     entries into a :class:`ConstraintBlock` in place: the constant ones once per layout in
     :meth:`setup`, the rest every tick in :meth:`update`. ``equality`` rows have
     ``lower == upper``. ``name`` names the group in failure diagnoses.
+
+    Two declarations let a problem builder do more with the rows than keep them:
+    ``eliminable_as`` (an :class:`Elimination`: the builder may solve the rows away, which
+    needs both kinds registered once each; with any of them missing it solves the full QP)
+    and ``gives_torques`` (the rows are the joint torques less the nonlinear effects,
+    ``M_a qdd - J_a^T f``, in joint order: the builder reads the torques from them).
     """
 
     #: Group name, e.g. ``"torque limits"``.
@@ -54,6 +75,11 @@ class Constraint:
     slacks: tuple[str, ...] = ()
     #: Frames whose kinematics the constraint reads.
     frames: tuple[str, ...] = ()
+    #: The rows a builder may eliminate (``None``: they stay rows of the QP); such a
+    #: constraint names the contact task its rows are made of in ``contacts``.
+    eliminable_as: Elimination | None = None
+    #: Whether the rows are the joint torques less the nonlinear effects (see above).
+    gives_torques: bool = False
 
     def rows(self, layout: VariableLayout) -> int:
         """Number of rows for ``layout``."""

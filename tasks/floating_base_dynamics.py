@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tasks import constraint_kernels
-from tasks.constraint import Constraint, ConstraintBlock
+from tasks.constraint import Constraint, ConstraintBlock, Elimination
 from tasks.contact_task import ContactTask
 from tasks.variable_layout import VariableLayout
 
@@ -25,6 +25,7 @@ class FloatingBaseDynamics(Constraint):
 
     name = "dynamics"
     equality = True
+    eliminable_as = Elimination.FLOATING_BASE_DYNAMICS
 
     def __init__(self, contacts: ContactTask):
         """Args:

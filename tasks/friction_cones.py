@@ -9,6 +9,7 @@ import numpy as np
 from tasks import constraint_kernels
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.variable_layout import VariableLayout
+from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 
 if TYPE_CHECKING:
@@ -25,16 +26,29 @@ class FrictionCones(Constraint):
 
     name = "friction"
 
-    def __init__(self, n_contacts: int, *, mu: float, min_force_n: float, max_force_n: float):
+    def __init__(self, n_contacts: int, *, mu: float, min_force_n: float, max_force_n: float,
+                 max_force: np.ndarray | None = None):
         """Args:
             n_contacts: Number of contacts of the layouts it will serve.
             mu: Friction coefficient of the pyramid.
             min_force_n: Minimum normal force of a loaded contact [N].
             max_force_n: Initial maximum normal force of every contact [N].
+            max_force: An array (n_contacts,) of float64 that another object updates in
+                place and this constraint reads every tick (a contact schedule's bounds);
+                by default one of its own, filled with ``max_force_n``.
         """
         self.mu = as_float("mu", mu, low=0.0)
         self.min_force_n = as_float("min_force_n", min_force_n, low=0.0)
-        self.max_force = np.full(n_contacts, as_float("max_force_n", max_force_n, low=0.0))
+        limit = as_float("max_force_n", max_force_n, low=0.0)
+        if max_force is None:
+            max_force = np.full(n_contacts, limit)
+        elif (not isinstance(max_force, np.ndarray) or max_force.shape != (n_contacts,)
+              or max_force.dtype != np.float64):
+            raise ConfigurationError(
+                f"max_force: expected a float64 array of shape ({n_contacts},) to read in "
+                f"place, received {type(max_force).__name__} {np.shape(max_force)}")
+        #: Each contact's maximum normal force [N], read every tick (update it in place).
+        self.max_force = max_force
 
     def rows(self, layout: VariableLayout) -> int:
         return 4 * len(layout.force_contacts)

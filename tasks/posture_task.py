@@ -8,8 +8,7 @@ import numpy as np
 
 from tasks import task_kernels
 from tasks.task import Task
-from wbc.core.errors import ConfigurationError
-from wbc.core.validation import as_vector
+from tasks.task_block import TaskBlock
 
 if TYPE_CHECKING:
     from wbc.model.kinematics import RobotKinematics
@@ -27,7 +26,9 @@ class PostureTask(Task):
                  weight: float = 0.05):
         self.dim = n_joints
         super().__init__(kp=kp, kd=kd, weight=weight, nv=6 + n_joints)
-        self.jacobian[:, 6:] = np.eye(n_joints)
+
+    def setup(self, block: TaskBlock) -> None:
+        block.jacobian[:, 6:] = np.eye(self.dim)  # the joints' accelerations, after the base's
 
     @property
     def joint_weights(self) -> np.ndarray:
@@ -40,11 +41,7 @@ class PostureTask(Task):
 
     def set_joint_weights(self, weights: np.ndarray) -> None:
         """Relative weights (n_joints,), each >= 0, multiplying ``weight`` joint by joint."""
-        weights = as_vector("PostureTask.joint_weights", weights, self.dim)
-        if np.any(weights < 0.0):
-            raise ConfigurationError(
-                f"PostureTask.joint_weights: expected values >= 0, received {weights.tolist()}")
-        self.row_weights[:] = weights
+        self._check_and_store_row_weights("PostureTask.joint_weights", weights)
 
     def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
         self._require_target()

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from tasks import constraint_kernels
-from tasks.constraint import Constraint, ConstraintBlock
+from tasks.constraint import Constraint, ConstraintBlock, Elimination
 from tasks.contact_task import ContactTask
 from tasks.variable_layout import VariableLayout
 
@@ -18,6 +18,7 @@ class StanceContacts(Constraint):
 
     name = "stance contacts"
     equality = True
+    eliminable_as = Elimination.STANCE_CONTACTS
 
     def __init__(self, contacts: ContactTask):
         """Args:

@@ -1,4 +1,4 @@
-"""Base class of acceleration-level tasks: ``weight * ||J qdd + drift - a_des||^2``."""
+"""Base class of the QP's tasks: ``weight * ||J x + drift - desired||^2`` on chosen variables."""
 
 from __future__ import annotations
 
@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
+from tasks.task_block import InPlace, TaskBlock
+from tasks.variable_layout import QDD, variable_width
 from wbc.core.compiled_call import bind_compiled
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector
@@ -35,7 +37,7 @@ def _store_motion(reference, target, velocity, feedforward):  # pragma: no cover
 
 
 class Task:
-    """An acceleration-level task on the generalized accelerations ``qdd`` (nv,).
+    """A term of the QP's cost, by default on the generalized accelerations ``qdd`` (nv,).
 
     Each tick, :meth:`update` reads the robot's kinematics (a
     :class:`tasks.RobotKinematics` already updated at the measured state) and fills, in
@@ -43,17 +45,23 @@ class Task:
 
     - ``error`` (dim,): target minus current value, in the task space;
     - ``error_rate`` (dim,): target velocity minus current velocity;
-    - ``jacobian`` (dim, nv): the task velocity is ``jacobian @ v``;
+    - ``jacobian`` (dim, width): the task velocity is ``jacobian @ v`` for a task on ``qdd``;
     - ``drift`` (dim,): the task acceleration at ``qdd = 0`` (``Jdot v``);
     - ``desired_acceleration`` (dim,): ``kp * error + kd * error_rate + feedforward``.
 
-    The QP term is ``weight * row_weights * (jacobian @ qdd + drift - desired)^2``, summed
-    over the rows. Gains default to critical damping, ``kd = 2 sqrt(kp)``.
+    The QP term is ``weight * row_weights * (jacobian @ x_vars + drift - desired)^2``,
+    summed over the rows, where ``x_vars`` are the decision variables the task names in
+    ``variables`` (:class:`tasks.VariableLayout`): ``"qdd"`` (the default, nv columns),
+    ``"force:<contact>"`` (3 columns, world x, y, z [N]; a contact in the air has none and
+    its force counts as zero), ``"slack:<name>"``. Gains default to critical damping,
+    ``kd = 2 sqrt(kp)``.
 
     To write a task, subclass this, set ``dim``, list the frames it reads in ``frames``
-    and implement :meth:`compute`; write into the arrays in place (``array[...] = ...``):
-    a controller that registers the task stacks these arrays into its QP blocks, allocated
-    once. The built-in tasks override :meth:`update` with one compiled call.
+    and implement :meth:`compute`. Write into the arrays in place (``array[...] = ...``):
+    a problem builder that registers the task hands it a :class:`tasks.TaskBlock` of views
+    into the QP's stacked rows (:meth:`attach`), and replacing an array (``self.jacobian =
+    ...``, ``task.row_weights = ...``) raises, naming the task and the array. The built-in
+    tasks override :meth:`_compiled_call` with one compiled kernel.
 
     The references live in ``reference`` (3, dim): target, target velocity, feed-forward
     acceleration; the gains in ``gains``: kp, kd, weight. Both are updated in place (setters
@@ -64,31 +72,52 @@ class Task:
     dim: int = 0
     #: Names of the frames whose kinematics the task reads (``RobotKinematics.frames``).
     frames: tuple[str, ...] = ()
+    #: The decision variables the Jacobian's columns span, in order.
+    variables: tuple[str, ...] = (QDD,)
+
+    jacobian = InPlace("jacobian")
+    drift = InPlace("drift")
+    desired_acceleration = InPlace("desired")
+    #: Per-row multipliers of ``weight`` (ones by default).
+    row_weights = InPlace("row_weights")
+    gains = InPlace("gains")
+    error = InPlace()
+    error_rate = InPlace()
+    reference = InPlace()
 
     def __init__(self, *, kp: float, kd: float | None = None, weight: float = 1.0,
-                 nv: int = 18):
+                 nv: int | None = None):
         """Args:
             kp: Stiffness [1/s^2].
             kd: Damping [1/s]; ``None`` for critical damping ``2 sqrt(kp)``.
             weight: Cost weight (dimensionless, relative to other tasks).
-            nv: Dimension of the velocity vector.
+            nv: Dimension of the velocity vector; ``None``: that of the kinematics the task
+                is first bound to (:meth:`bind`), which allocates the Jacobian.
         """
         self.nv = nv
-        self.gains = np.zeros(3)
-        self.reference = np.zeros((3, self.dim))
+        own = self.__dict__
+        own["_reference"] = np.zeros((3, self.dim))
+        own["_error"] = np.zeros(self.dim)
+        own["_error_rate"] = np.zeros(self.dim)
+        self._block = TaskBlock.owned(self.dim, 0 if nv is None else self.width(nv))
+        if nv is not None:
+            self.setup(self._block)
         self._zeros = np.zeros(self.dim)  # the default velocity and feed-forward; never written
         self._has_target = False
+        self._kinematics: RobotKinematics | None = None
         self.set_gains(kp=kp, kd=kd)
         self.set_weight(weight)
-        self.error = np.zeros(self.dim)
-        self.error_rate = np.zeros(self.dim)
-        self.jacobian = np.zeros((self.dim, nv))
-        self.drift = np.zeros(self.dim)
-        self.desired_acceleration = np.zeros(self.dim)
-        #: Per-row multipliers of ``weight`` (ones by default).
-        self.row_weights = np.ones(self.dim)
         #: Indices of ``frames`` in the kinematics, set by :meth:`bind`.
         self.frame_indices = np.zeros(len(self.frames), dtype=np.int64)
+
+    def width(self, nv: int) -> int:
+        """Number of Jacobian columns: the widths of ``variables`` for a robot of ``nv``."""
+        return sum(variable_width(name, nv) for name in self.variables)
+
+    @property
+    def block(self) -> TaskBlock:
+        """The arrays the QP's cost reads (views of a problem builder's rows once registered)."""
+        return self._block
 
     @property
     def kp(self) -> float:
@@ -129,6 +158,16 @@ class Task:
     def set_weight(self, weight: float) -> None:
         """Set the cost weight (>= 0; 0 takes the task out of the QP)."""
         self.gains[2] = as_float("weight", weight, low=0.0)
+
+    def set_row_weights(self, weights: np.ndarray) -> None:
+        """Per-row multipliers (dim,) of the weight, each >= 0; copied in."""
+        self._check_and_store_row_weights(f"{type(self).__name__}.row_weights", weights)
+
+    def _check_and_store_row_weights(self, name: str, weights: np.ndarray) -> None:
+        weights = as_vector(name, weights, self.dim)
+        if np.any(weights < 0.0):
+            raise ConfigurationError(f"{name}: expected values >= 0, received {weights.tolist()}")
+        self.row_weights[:] = weights
 
     def set_feedforward(self, acceleration: np.ndarray) -> None:
         """Set the feed-forward task acceleration (dim,)."""
@@ -172,14 +211,59 @@ class Task:
         reference[0], reference[1], reference[2] = target, velocity, feedforward
         self._has_target = True
 
+    # ------------------------------------------------------------------ blocks
+
+    def setup(self, block: TaskBlock) -> None:
+        """Write the entries that never change (a selection Jacobian) into a new block of
+        the task's own; nothing by default. A block a builder attaches gets them copied."""
+
     def bind(self, kinematics: RobotKinematics) -> None:
-        """Resolve ``frames`` in ``kinematics`` (called when a controller registers the task).
+        """Size the Jacobian for ``kinematics``' robot and resolve ``frames`` in it (a
+        controller does it when it registers the task).
 
         Raises:
-            ConfigurationError: The kinematics does not compute one of the frames.
+            ConfigurationError: A robot of another size than ``nv``, an unknown variable, or
+                a frame the kinematics does not compute.
         """
+        if self.nv is not None and self.nv != kinematics.nv:
+            raise ConfigurationError(f"task: {type(self).__name__} has nv={self.nv}, the robot "
+                                     f"has nv={kinematics.nv}")
+        self.nv = kinematics.nv
+        width = self.width(kinematics.nv)
+        if self._block.jacobian.shape != (self.dim, width):
+            block = TaskBlock.owned(self.dim, width)
+            self._block.copy_into(block)
+            self.setup(block)
+            self._block = block
+            self._call = None
         for i, frame in enumerate(self.frames):
             self.frame_indices[i] = kinematics.frame_index(frame)
+        self._kinematics = kinematics
+
+    def attach(self, block: TaskBlock) -> None:
+        """Use ``block`` from now on (a problem builder's views), with this task's values
+        (gains, row weights, constant Jacobian entries) copied into it. Bind first.
+
+        Raises:
+            ConfigurationError: A block of another shape than the task's arrays.
+        """
+        expected = self._block.jacobian.shape
+        if block.jacobian.shape != expected or block.gains.shape != (3,):
+            raise ConfigurationError(
+                f"{type(self).__name__}: a task block of Jacobian shape {expected} expected, "
+                f"received {block.jacobian.shape}; bind the task to the kinematics first")
+        self._block.copy_into(block)
+        self._block = block
+        self._call = None  # its compiled call held the arrays it had before
+
+    def detach(self) -> None:
+        """Go back to arrays of its own, with its values (a builder that drops the task)."""
+        block = TaskBlock.owned(self.dim, self._block.jacobian.shape[1])
+        self._block.copy_into(block)
+        self._block = block
+        self._call = None
+
+    # ------------------------------------------------------------------ the tick
 
     def update(self, kinematics: RobotKinematics) -> None:
         """Recompute error, Jacobian, drift and desired acceleration at the last state.
@@ -190,6 +274,8 @@ class Task:
         """
         call = self._call
         if call is None or call[0] is not kinematics:
+            if kinematics is not self._kinematics:
+                self.bind(kinematics)
             if not self._bind(kinematics):
                 self.compute(kinematics)
                 desired = self.desired_acceleration
@@ -204,6 +290,8 @@ class Task:
         (milliseconds for a kernel's first call in a process), rather than on the first
         tick that runs the task. Nothing for a task written in Python, or one that cannot
         run yet (no target): that one binds on its first tick."""
+        if kinematics is not self._kinematics:
+            self.bind(kinematics)
         call = self._call
         if call is None or call[0] is not kinematics:
             try:

@@ -111,3 +111,10 @@ def rolling_contacts(frame_jacobian, frame_drift, indices, radius, gains, v, jac
                 s += jacobian[row + a, k] * v[k]
             error_rate[row + a] = -s
             desired[row + a] = -gains[1] * s
+
+
+@numba.njit(cache=True)
+def force_target(reference, desired):
+    """A contact force task's desired value: its target force [N] plus the feed-forward row."""
+    for k in range(desired.size):
+        desired[k] = reference[0, k] + reference[2, k]

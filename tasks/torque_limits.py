@@ -23,6 +23,7 @@ class TorqueLimits(Constraint):
     """
 
     name = "torque limits"
+    gives_torques = True
 
     def __init__(self, contacts: ContactTask, tau_max: np.ndarray):
         """Args:

@@ -37,26 +37,26 @@ def test_the_example_task_jacobian_and_drift_against_finite_differences(model):
     task.bind(kinematics)
     rng = np.random.default_rng(0)
     h = 1e-6
+
+    def height(qq):
+        data = model.createData()
+        pin.framesForwardKinematics(model, data, qq)
+        return data.oMf[model.getFrameId("base")].translation[2]
+
+    def rate(qq, v):
+        kinematics.update(qq, v)
+        task.update(kinematics)
+        return task.jacobian @ v
+
     for _ in range(5):
         q = random_configuration(model, rng, scale=0.5)
         v = rng.normal(size=model.nv)
-
-        def height(qq):
-            data = model.createData()
-            pin.framesForwardKinematics(model, data, qq)
-            return data.oMf[model.getFrameId("base")].translation[2]
-
-        def rate(qq):
-            kinematics.update(qq, v)
-            task.update(kinematics)
-            return task.jacobian @ v
-
         plus, minus = pin.integrate(model, q, h * v), pin.integrate(model, q, -h * v)
         kinematics.update(q, v)
         task.update(kinematics)
         jv, drift = (task.jacobian @ v).copy(), task.drift.copy()
         np.testing.assert_allclose(jv, (height(plus) - height(minus)) / (2 * h), atol=1e-6)
-        np.testing.assert_allclose(drift, (rate(plus) - rate(minus)) / (2 * h), atol=1e-4)
+        np.testing.assert_allclose(drift, (rate(plus, v) - rate(minus, v)) / (2 * h), atol=1e-4)
 
 
 class _CalfTask(Task):

@@ -1,4 +1,4 @@
-"""The DAQP backend: its direct C call gives the wrapper's solutions, and steps aside when it must."""
+"""The DAQP backend: its direct C call gives the wrapper's solutions, steps aside when it must."""
 
 import importlib.metadata
 
@@ -22,8 +22,8 @@ def lift_problems(description, model, count=12):
     problems = []
     for i in range(count):
         if i == count // 2:
-            controller.set_max_normal_force("FR", 0.0)
-            controller.set_swing("FR")
+            controller.schedule.set_max_normal_force("FR", 0.0)
+            controller.schedule.set_swing("FR")
         q = random_configuration(model, rng, scale=0.05, base=standing)
         out = controller.step(q, 0.2 * rng.normal(size=18))
         assert out.ok, out.message

@@ -1,4 +1,4 @@
-"""The desired joint state: the plan integrated, bounded around and decaying to the measured state."""
+"""The desired joint state: the plan integrated, bounded around and decaying to the measurement."""
 
 import numpy as np
 import pytest
@@ -61,5 +61,6 @@ def test_release_restarts_from_the_measured_state():
 
 
 def test_bad_bounds_name_the_field():
-    with pytest.raises(ConfigurationError, match=r"max_position_error_rad: expected a value in \[0"):
+    with pytest.raises(ConfigurationError,
+                       match=r"max_position_error_rad: expected a value in \[0"):
         JointReference(2, max_position_error_rad=-0.1, max_velocity_error_rad_s=1.0)

@@ -37,7 +37,7 @@ def high_five():
 
 
 def test_high_five_goes_through_every_phase(high_five):
-    summary, loop, controller, lift, phases, _ = high_five
+    summary, _, controller, lift, phases, _ = high_five
     assert phases == ALL_PHASES
     assert lift.progress == 1.0
     assert controller.stance_legs == ["FL", "FR", "RL", "RR"]
@@ -60,7 +60,7 @@ def test_high_five_quality(high_five):
 
 
 def test_high_five_reaches_its_target_in_front_of_the_shoulder(high_five):
-    _, loop, controller, lift, _, _ = high_five
+    _, loop, _, lift, _, _ = high_five
     assert lift.foot_target[2] == pytest.approx(0.40)
     shoulder = lift.shoulder_while_holding
     assert lift.foot_target[0] > shoulder[0] + 0.1
@@ -73,7 +73,7 @@ def test_high_five_reaches_its_target_in_front_of_the_shoulder(high_five):
 
 @pytest.mark.parametrize("leg", ["FL", "RL", "RR"])
 def test_any_leg_can_be_raised(leg):
-    s, loop, controller, lift, phases, _ = run_lift(leg, height_m=0.25, hold_s=0.2)
+    s, _, _, _, phases, _ = run_lift(leg, height_m=0.25, hold_s=0.2)
     assert phases == ALL_PHASES
     assert not s.fell and s.qp_failures == 0
     assert s.raised_foot_rms_mm <= 5.0
@@ -82,8 +82,7 @@ def test_any_leg_can_be_raised(leg):
 
 @pytest.mark.parametrize("at_s", [0.5, 1.2, 2.0, 3.5])
 def test_interrupted_lift_returns_to_four_loaded_feet_within_1_5_s(at_s):
-    s, loop, controller, lift, phases, interrupted_in = run_lift("FR", hold_s=2.0,
-                                                                  interrupt_at_s=at_s)
+    s, loop, _, lift, _, interrupted_in = run_lift("FR", hold_s=2.0, interrupt_at_s=at_s)
     assert interrupted_in in (LiftPhase.SHIFTING, LiftPhase.UNLOADING, LiftPhase.RAISING,
                               LiftPhase.HOLDING)
     assert not s.fell and s.qp_failures == 0
@@ -96,11 +95,13 @@ def test_interrupted_lift_returns_to_four_loaded_feet_within_1_5_s(at_s):
 def test_lift_validation():
     loop = ControlLoop.simulated()
     controller = loop.controller
-    with pytest.raises(ConfigurationError, match="height_m: expected a value in \\[0.1, 0.5\\], received 0.7"):
+    with pytest.raises(ConfigurationError,
+                       match=r"height_m: expected a value in \[0.1, 0.5\], received 0.7"):
         LegLift(controller, height_m=0.7)
     with pytest.raises(UnknownNameError, match="unknown leg 'XL'"):
         LegLift(controller, leg="XL")
-    with pytest.raises(ConfigurationError, match="forward_m: expected a value in \\[-0.1, 0.3\\], received 0.5"):
+    with pytest.raises(ConfigurationError,
+                       match=r"forward_m: expected a value in \[-0.1, 0.3\], received 0.5"):
         LegLift(controller, forward_m=0.5)
     # The highest, farthest allowed target is still within the leg's reach.
     lift = LegLift(controller, height_m=0.5, forward_m=0.3, lateral_m=0.15)

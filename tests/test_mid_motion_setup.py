@@ -5,8 +5,8 @@ A numba function's first call in a process reads its machine code from numba's c
 for a new QP take a few hundred microseconds: done inside a tick, at the moment a foot
 leaves or touches the ground, any of these stalls the 1 kHz loop for several periods. The
 loop's construction does them all; this test counts them (it does not time anything) from
-the loop's first tick on, while the GO2 stands and runs every behaviour. It runs in a fresh interpreter: in the test process, earlier
-tests have already loaded every kernel.
+the loop's first tick on, while the GO2 stands and runs every behaviour. It runs in a fresh
+interpreter: in the test process, earlier tests have already loaded every kernel.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 SCRIPT = r"""
 import json
 from numba.core import dispatcher
-from actions.messages import (FollowJointTrajectoryGoal, HighFiveGoal, JointTrajectory,
-                              JointTrajectoryPoint, SitGoal, StandGoal)
+from actions import (FollowJointTrajectoryGoal, HighFiveGoal, JointTrajectory,
+                     JointTrajectoryPoint, SitGoal, StandGoal)
 from sim.control_loop import ControlLoop
 from wbc.backends.daqp_backend import DaqpBackend
 

@@ -5,20 +5,22 @@ import pytest
 
 from wbc import WholeBodyController
 from wbc.controller.controller_config import ControllerConfig
-from wbc.controller.motor_command_shaper import MotorCommandShaper
+from wbc.controller.motor_command_shaper import MotorCommandShaper, joint_types
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import JOINT_NAMES, Go2Description
 
 
 def shaper(**overrides) -> MotorCommandShaper:
-    effort = Go2Description().effort_limit
-    return MotorCommandShaper(ControllerConfig(**overrides), tau_max=0.9 * effort,
-                              effort_limit=effort)
+    description = Go2Description()
+    effort = description.effort_limit
+    return MotorCommandShaper(ControllerConfig(**overrides).shaping, control_period_s=1e-3,
+                              tau_max=0.9 * effort, effort_limit=effort,
+                              joint_types=joint_types(JOINT_NAMES))
 
 
 def test_stance_and_swing_gains_per_leg():
     s = shaper(stance_kp=40.0, stance_kd=2.0, swing_kp=55.0, swing_kd=2.5)
-    s.set_stance(1, False)  # FR
+    s.set_stance(Go2Description().leg_joint_indices("FR"), False)
     for i, name in enumerate(JOINT_NAMES):
         swing = name.startswith("FR")
         assert s.kp[i] == (55.0 if swing else 40.0) and s.kd[i] == (2.5 if swing else 2.0)
@@ -57,8 +59,8 @@ def test_controller_output_is_a_motor_command_with_swing_gains_on_a_raised_leg(d
     assert out.ok and (out.kp == controller.config.stance_kp).all()
     np.testing.assert_allclose(out.tau, out.clipped_torque_at(
         standing[7:], np.zeros(12), controller.description.effort_limit))
-    controller.set_max_normal_force("FR", 0.0)
-    controller.set_swing("FR")
+    controller.schedule.set_max_normal_force("FR", 0.0)
+    controller.schedule.set_swing("FR")
     out = controller.step(standing, np.zeros(18))
     fr = [i for i, name in enumerate(JOINT_NAMES) if name.startswith("FR")]
     assert (out.kp[fr] == controller.config.swing_kp).all()

@@ -86,28 +86,29 @@ def test_swing_and_stance_switch_the_contact(standing):
     controller, sim = standing
     q, v = sim.state()
     controller.step(q, v)
-    controller.set_max_normal_force("FR", 0.0)
+    controller.schedule.set_max_normal_force("FR", 0.0)
     assert controller.contacts["FR"].weight_forces == pytest.approx(
         controller.config.force_weight * 1e6)
-    controller.set_swing("FR")
+    controller.schedule.set_swing("FR")
     assert controller.stance_legs == ["FL", "RL", "RR"]
     assert not controller.contacts["FR"].active
     out = controller.step(q, v)
     assert out.ok and np.all(out.forces[1] == 0.0) and "FR_foot" in out.task_errors
     with pytest.raises(ConfigurationError, match="at least three feet must stay in stance"):
-        controller.set_swing("RL")
+        controller.schedule.set_swing("RL")
     with pytest.raises(ConfigurationError, match="FR is in swing"):
-        controller.set_max_normal_force("FR", 10.0)
+        controller.schedule.set_max_normal_force("FR", 10.0)
     far = controller.shoulder_position("FR") + [0.0, 0.0, 0.5]
     with pytest.raises(ReachabilityError, match="reachable: at most 0.40 m"):
         controller.set_foot_target("FR", far)
     controller.set_foot_target("FR", far, clamp_to_reach=True)
-    reached = np.ravel(controller.foot_tasks["FR"].target_world) - controller.shoulder_position("FR")
+    reached = (np.ravel(controller.foot_tasks["FR"].target_world)
+               - controller.shoulder_position("FR"))
     np.testing.assert_allclose(reached, [0.0, 0.0, 0.40], atol=1e-12)
     safe = controller.safe_command(v, "guard tripped")
     assert safe.status is ControlStatus.FALLBACK and safe.message == "guard tripped"
-    controller.set_stance("FR", max_normal_force_n=0.0)
-    assert controller.contacts["FR"].active and controller.max_normal_force("FR") == 0.0
+    controller.schedule.set_stance("FR", max_normal_force_n=0.0)
+    assert controller.contacts["FR"].active and controller.schedule.max_normal_force("FR") == 0.0
     assert controller.support_legs() == ["FL", "RL", "RR"]
 
 
@@ -121,7 +122,7 @@ def test_posture_and_foot_weights(standing):
     assert controller.posture_tasks[3].get_joint("FR_hip_joint") == pytest.approx(target[3])
     with pytest.raises(ConfigurationError, match="expected values >= 0"):
         controller.set_posture_weights(np.full(12, -1.0))
-    controller.set_swing("FR")
+    controller.schedule.set_swing("FR")
     controller.set_foot_weight("FR", 0.0)
     out = controller.step(q, v)
     assert out.ok

@@ -21,4 +21,5 @@ def test_placo_loads_the_same_go2(description, model):
     pin.framesForwardKinematics(model, data, q)
     for frame in FOOT_FRAMES.values():
         p_placo = robot.get_T_world_frame(frame)[:3, 3]
-        np.testing.assert_allclose(p_placo, data.oMf[model.getFrameId(frame)].translation, atol=1e-9)
+        p_pin = data.oMf[model.getFrameId(frame)].translation
+        np.testing.assert_allclose(p_placo, p_pin, atol=1e-9)

@@ -13,15 +13,16 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from actions import GoalStatus, HighFiveGoal
-from actions.go2.high_five_behaviour import INVALID_HOLD_SECONDS, INVALID_TARGET_HEIGHT, MAX_HOLD_S
-from actions.go2.robot_context import tilt_deg
-from actions.messages import (
+from actions import (
     FollowJointTrajectoryGoal,
     FollowJointTrajectoryResult,
+    GoalStatus,
+    HighFiveGoal,
     JointTrajectory,
     JointTrajectoryPoint,
 )
+from actions.go2.high_five_behaviour import INVALID_HOLD_SECONDS, INVALID_TARGET_HEIGHT, MAX_HOLD_S
+from actions.go2.robot_context import tilt_deg
 from actions.robot.robot_interface import MappedRobot
 from sim import cli
 from sim.control_loop import ControlLoop

@@ -29,8 +29,8 @@ def controller_at(model, standing, swing, seed):
     c = WholeBodyController()
     c.reset(standing)
     for leg in swing:
-        c.set_max_normal_force(leg, 0.0)
-        c.set_swing(leg)
+        c.schedule.set_max_normal_force(leg, 0.0)
+        c.schedule.set_swing(leg)
         c.set_foot_target(leg, c.foot_position(leg) + [0.05, 0.0, 0.1], [0.1, 0, 0.2], [1, 2, 3])
     c.set_com_target(c.com_target + [0.01, -0.02, 0.0], [0.05, 0.0, 0.0], [0.1, 0.2, 0.0])
     c.set_posture_weights(np.linspace(0.5, 3.0, 12))
@@ -39,7 +39,7 @@ def controller_at(model, standing, swing, seed):
     v = rng.normal(size=18) * 0.3
     c.kinematics.update(q, v)
     c._q = q
-    c._before_update()
+    c.balance.before_update()
     c.builder.update()
     return c
 
@@ -68,7 +68,7 @@ def test_reduced_qp_has_the_full_qps_solution(model, standing, swing, seed):
     def objective(p, y):
         return 0.5 * y @ p.H @ y + p.f @ y
     z2 = z.x + 1e-3 * np.random.default_rng(seed).normal(size=z.x.size)
-    x2 = builder._problem().T @ z2 + builder._problem().t0
+    x2 = builder.plan.reduction.T @ z2 + builder.plan.reduction.t0
     gap = (objective(full, x2) - objective(full, x)) - (objective(reduced, z2)
                                                          - objective(reduced, z.x))
     assert abs(gap) < 1e-9 * max(1.0, abs(objective(full, x)))
@@ -79,7 +79,7 @@ def test_any_reduced_point_satisfies_the_eliminated_equalities(model, standing, 
     c = controller_at(model, standing, swing, 7)
     builder = c.builder
     builder.assemble()
-    entry = builder._problem()
+    entry = builder.plan.reduction
     full = builder.problem
     equality = full.is_equality
     rng = np.random.default_rng(1)
@@ -103,7 +103,7 @@ def test_task_costs_match_the_dense_formula(model, standing):
         residual = task.drift - task.desired_acceleration
         H[:nv, :nv] += task.jacobian.T @ (w[:, None] * task.jacobian)
         f[:nv] += task.jacobian.T @ (w * residual)
-    entry = builder._problem()
+    entry = builder.plan
     H += np.diag(entry.weights)
     f -= entry.rate_weights * entry.x_prev
     tau_rows = entry.tau_block.A

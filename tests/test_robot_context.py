@@ -1,6 +1,7 @@
 """The behaviours' balance watch: tilt, and the capture point's margin in the ZMP polygon."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -11,7 +12,8 @@ from wbc.model.support_polygon import SupportPolygon
 
 
 class StubController:
-    """What the watch reads of a controller: support feet, centre of mass, force bounds."""
+    """What the watch reads of a controller: its schedule's support feet and minimum force,
+    the model's mass, the centre of mass, the feet."""
 
     total_mass_kg = 15.0
     min_normal_force_n = 10.0
@@ -23,18 +25,15 @@ class StubController:
                                                    (-0.19, -0.14)])}
         self.com = np.r_[rng.normal(scale=0.05, size=2), rng.uniform(0.2, 0.35)]
         self.vcom = np.r_[rng.normal(scale=0.3, size=2), 0.0]
-
-    def support_legs(self) -> list[str]:
-        return list(self.legs)
+        self.schedule = SimpleNamespace(support_legs=lambda: list(self.legs),
+                                        min_normal_force_n=self.min_normal_force_n)
+        self.description = SimpleNamespace(total_mass=self.total_mass_kg)
 
     def com_position(self) -> np.ndarray:
         return self.com.copy()
 
     def com_velocity(self) -> np.ndarray:
         return self.vcom.copy()
-
-    def foot_position(self, leg: str) -> np.ndarray:
-        return self.feet[leg].copy()
 
     def foot_positions(self) -> np.ndarray:
         return np.array([self.feet[leg] for leg in LEGS])

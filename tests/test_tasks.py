@@ -11,10 +11,12 @@ import pytest
 from tasks import (
     BaseOrientationTask,
     ComTask,
+    ContactForceTask,
     ContactTask,
     FramePositionTask,
     PostureTask,
     RobotKinematics,
+    TaskBlock,
 )
 from tests.conftest import random_configuration
 from wbc.core.errors import ConfigurationError, NonFiniteError
@@ -48,6 +50,15 @@ def velocity_fd(value, model, q, v):
     """d/dt value(q(t)) at t = 0 along q(t) = q (+) t v, by central differences."""
     plus, minus = pin.integrate(model, q, H * v), pin.integrate(model, q, -H * v)
     return (value(plus) - value(minus)) / (2 * H)
+
+
+def world_points(model, points):
+    """value(qq): the stacked world positions of ``(frame name, point in frame)`` pairs."""
+    def value(qq):
+        data = model.createData()
+        pin.framesForwardKinematics(model, data, qq)
+        return np.concatenate([data.oMf[model.getFrameId(n)].act(p) for n, p in points])
+    return value
 
 
 def drift_fd(task, model, q, v):
@@ -118,12 +129,7 @@ def test_contact_task_rolling_point(model, radius):
         for name in frames:
             oMf = data.oMf[model.getFrameId(name)]
             points.append((name, oMf.actInv(oMf.translation + np.array([0, 0, -radius]))))
-
-        def contact_points(qq):
-            d = model.createData()
-            pin.framesForwardKinematics(model, d, qq)
-            return np.concatenate([d.oMf[model.getFrameId(n)].act(p) for n, p in points])
-
+        contact_points = world_points(model, points)
         np.testing.assert_allclose(task.jacobian @ v, velocity_fd(contact_points, model, q, v),
                                    atol=1e-5, rtol=1e-5)
         np.testing.assert_allclose(task.drift, drift_fd(task, model, q, v), atol=1e-4, rtol=1e-4)
@@ -152,7 +158,8 @@ def test_targets_are_copied_and_validated(model):
     assert task.target[0] == 0.1
     with pytest.raises(NonFiniteError, match="FR_foot.target: non-finite value at index \\[2\\]"):
         task.set_target([0.0, 0.0, np.nan])
-    with pytest.raises(ConfigurationError, match=r"expected an array of shape \(3,\), received shape \(2,\)"):
+    with pytest.raises(ConfigurationError,
+                       match=r"expected an array of shape \(3,\), received shape \(2,\)"):
         task.set_target([0.0, 0.0])
     assert task.target[0] == 0.1  # a rejected target leaves the old one
 
@@ -166,7 +173,8 @@ def test_task_without_target_says_so(model):
 
 
 def test_bad_task_parameters(model):
-    with pytest.raises(ConfigurationError, match="kp: expected a value in \\[0, inf\\], received -1"):
+    with pytest.raises(ConfigurationError,
+                       match="kp: expected a value in \\[0, inf\\], received -1"):
         ComTask(kp=-1.0)
     with pytest.raises(ConfigurationError, match="unknown frame 'hand'"):
         FramePositionTask(model, "hand")
@@ -174,3 +182,32 @@ def test_bad_task_parameters(model):
         FramePositionTask(model, "FR_foot", axes="xw")
     with pytest.raises(ConfigurationError, match="expected a rotation matrix"):
         BaseOrientationTask().set_target(2.0 * np.eye(3))
+
+
+def test_a_force_task_s_value_is_the_force_and_its_desired_value_the_target(model):
+    """A task on a contact's force variables: ``J f + drift`` is the force itself (closed
+    form: the identity over ``force:FR``), its desired value the target."""
+    task = ContactForceTask("FR", target_n=[1.0, 2.0, 50.0])
+    assert task.variables == ("force:FR",) and task.width(model.nv) == 3
+    task.update(updated(model, random_configuration(model, np.random.default_rng(7)),
+                        np.zeros(18)))
+    forces = np.random.default_rng(8).normal(size=(5, 3))
+    np.testing.assert_allclose(forces @ task.jacobian.T + task.drift, forces)
+    np.testing.assert_array_equal(task.desired_acceleration, [1.0, 2.0, 50.0])
+    with pytest.raises(NonFiniteError, match=r"^FR force\.target: non-finite"):
+        task.set_target([0.0, np.nan, 0.0])
+
+
+def test_a_task_sizes_its_jacobian_when_bound_and_takes_only_a_block_of_that_size(model):
+    task = ComTask()
+    assert task.jacobian.shape == (3, 0) and task.nv is None   # no robot yet
+    task.set_weight(3.0)
+    task.bind(RobotKinematics(model, FRAMES))
+    assert task.jacobian.shape == (3, model.nv) and task.weight == 3.0
+    with pytest.raises(ConfigurationError, match=r"^ComTask: a task block of Jacobian shape "
+                                                 r"\(3, 18\) expected, received \(3, 17\)"):
+        task.attach(TaskBlock.owned(3, 17))
+    with pytest.raises(ConfigurationError, match=r"^ComTask\.jacobian: cannot be replaced"):
+        task.jacobian = np.zeros((3, model.nv))
+    with pytest.raises(ConfigurationError, match=r"^variables: unknown variable 'torque'"):
+        type("Odd", (ComTask,), {"variables": ("torque",)})().bind(RobotKinematics(model, FRAMES))

@@ -59,9 +59,10 @@ def check_solution(c, q, v, out, swing=()):
             continue
         rows = slice(3 * i, 3 * i + 3)
         acc = contact_jac[rows] @ qdd + contact.drift[rows]
-        np.testing.assert_allclose(acc, -c.config.contact_damping * contact_jac[rows] @ v, atol=1e-6)
+        np.testing.assert_allclose(acc, -c.config.contact_damping * contact_jac[rows] @ v,
+                                   atol=1e-6)
         assert abs(f[0]) <= mu * f[2] + 1e-7 and abs(f[1]) <= mu * f[2] + 1e-7
-        assert c.config.min_normal_force_n - 1e-7 <= f[2] <= c.max_normal_force(leg) + 1e-7
+        assert c.config.min_normal_force_n - 1e-7 <= f[2] <= c.schedule.max_normal_force(leg) + 1e-7
     assert np.all(np.abs(out.tau_ff) <= c.tau_max + 1e-6)
 
 
@@ -83,8 +84,8 @@ def test_standing_solution_satisfies_every_constraint(controller, model, standin
 
 
 def test_three_leg_solution_has_zero_swing_force(controller, model, standing):
-    controller.set_max_normal_force("FR", 0.0)
-    controller.set_swing("FR")
+    controller.schedule.set_max_normal_force("FR", 0.0)
+    controller.schedule.set_swing("FR")
     assert controller.stance_legs == ["FL", "RL", "RR"]
     for q, v in perturbed_states(model, standing, 5, seed=1):
         out = controller.step(q, v)
@@ -134,8 +135,8 @@ def test_diagnose_names_nothing_on_a_feasible_qp_and_the_culprit_on_an_infeasibl
         controller, standing):
     assert controller.step(standing, np.zeros(18)).ok
     assert controller.diagnose() == ("", None)  # it used to name "torque limits" here
-    controller.set_max_normal_force("FR", 0.0)
-    controller.set_swing("FR")
+    controller.schedule.set_max_normal_force("FR", 0.0)
+    controller.schedule.set_swing("FR")
     assert controller.step(standing, np.zeros(18)).ok
     assert controller.diagnose() == ("", None)
     # Torque limits of 0.1 % of the URDF's: standing on three feet is impossible.
@@ -149,7 +150,7 @@ def test_diagnose_names_nothing_on_a_feasible_qp_and_the_culprit_on_an_infeasibl
 
 def test_fallback_damps_joint_velocity(controller, standing):
     controller.step(standing, np.zeros(18))
-    good = controller._tau_good.copy()
+    good = controller.recovery.tau_good.copy()
     v = np.zeros(18)
     v[6:] = 1.0
     q = standing.copy()
@@ -215,11 +216,14 @@ def test_bad_parameters_are_named():
         ControllerConfig(friction="high")  # not Python's bare TypeError
     with pytest.raises(UnknownNameError, match=r"^unknown controller parameter 'kp'"):
         replace(ControllerConfig(), kp=1.0)
-    with pytest.raises(ConfigurationError, match="friction_coefficient: expected a value in \\(0, 5\\], received 0"):
+    with pytest.raises(ConfigurationError,
+                       match="friction_coefficient: expected a value in \\(0, 5\\], received 0"):
         ControllerConfig(friction_coefficient=0.0)
-    with pytest.raises(ConfigurationError, match="min_normal_force_n: expected less than max_normal_force_n"):
+    with pytest.raises(ConfigurationError,
+                       match="min_normal_force_n: expected less than max_normal_force_n"):
         ControllerConfig(min_normal_force_n=300.0)
-    with pytest.raises(UnknownNameError, match="unknown backend 'gurobi'; installed backends: daqp"):
+    with pytest.raises(UnknownNameError,
+                       match="unknown backend 'gurobi'; installed backends: daqp"):
         WholeBodyController(backend="gurobi")
 
 
@@ -265,17 +269,19 @@ def test_every_bad_value_names_the_field_and_its_range():
 
 
 def test_contact_changes_are_validated(controller):
-    controller.set_max_normal_force("FR", 0.0)
-    controller.set_swing("FR")
+    controller.schedule.set_max_normal_force("FR", 0.0)
+    controller.schedule.set_swing("FR")
     with pytest.raises(ConfigurationError, match="at least three feet must stay in stance"):
-        controller.set_swing("FL")
+        controller.schedule.set_swing("FL")
     with pytest.raises(ConfigurationError, match="FR is in swing; call set_stance"):
-        controller.set_max_normal_force("FR", 10.0)
-    with pytest.raises(ConfigurationError, match="FL max_normal_force_n: expected a value in \\[0, 250\\], received 300"):
-        controller.set_max_normal_force("FL", 300.0)
-    with pytest.raises(UnknownNameError, match="unknown leg 'XX'; valid legs: FL, FR, RL, RR"):
-        controller.set_swing("XX")
-    controller.set_stance("FR")
+        controller.schedule.set_max_normal_force("FR", 10.0)
+    with pytest.raises(ConfigurationError, match="FL max_normal_force_n: expected a value "
+                                                 "in \\[0, 250\\], received 300"):
+        controller.schedule.set_max_normal_force("FL", 300.0)
+    with pytest.raises(UnknownNameError,
+                       match="unknown leg 'XX'; valid legs: FL, FR, RL, RR"):
+        controller.schedule.set_swing("XX")
+    controller.schedule.set_stance("FR")
     assert controller.stance_legs == list(LEGS)
 
 
@@ -301,28 +307,25 @@ def _lift_in_lockstep(controllers, model, standing):
     for i, (q, v) in enumerate(perturbed_states(model, standing, 12, seed=11)):
         for c, out in zip(controllers, outputs):
             if i == 6:
-                c.set_max_normal_force("FR", 0.0)
-                c.set_swing("FR")
+                c.schedule.set_max_normal_force("FR", 0.0)
+                c.schedule.set_swing("FR")
             out.append(c.step(q, v))
     return outputs
 
 
-def test_reset_prepares_the_raised_foot_layouts_without_changing_any_tick(monkeypatch, model,
-                                                                          standing):
-    import wbc.controller.whole_body_controller as module
-
+def test_reset_prepares_the_raised_foot_layouts_without_changing_any_tick(model, standing):
     prepared = WholeBodyController()
     prepared.reset(standing)
-    monkeypatch.setattr(module, "_PREPARED_SUPPORTS", ())
     lazy = WholeBodyController()
+    lazy.prepared_supports = ()
     lazy.reset(standing)
-    assert len(prepared.builder._layouts) == 5 and len(lazy.builder._layouts) == 1
+    assert len(prepared.builder._plans) == 5 and len(lazy.builder._plans) == 1
     assert prepared.builder.layout.loaded.tolist() == [0, 1, 2, 3]  # still on four feet
     for a, b in zip(*_lift_in_lockstep([prepared, lazy], model, standing)):
         assert a.ok and b.ok
         for field in ("tau", "q_des", "dq_des", "tau_ff", "qdd", "forces"):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
-    assert len(prepared.builder._layouts) == 5  # the raise used a prepared layout
+    assert len(prepared.builder._plans) == 5  # the raise used a prepared layout
 
 
 def test_torque_limits_changed_after_reset_reach_every_prepared_layout(standing, model):

@@ -12,8 +12,17 @@ be imported first.
 
 from wbc.backends import available_backends
 from wbc.controller.balance_controller import BalanceController
+from wbc.controller.contact_schedule import ContactSchedule
 from wbc.controller.control_output import ControlOutput, ControlStatus
-from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.controller_config import (
+    ContactSettings,
+    ControllerConfig,
+    CostWeights,
+    LimitSettings,
+    ShapingSettings,
+    SolverSettings,
+    TaskGains,
+)
 from wbc.controller.joint_pd_controller import JointPdController
 from wbc.controller.joint_reference import JointReference
 from wbc.controller.placo_controller import PlacoController
@@ -27,17 +36,20 @@ from wbc.core.errors import (
     UnknownNameError,
     WbcError,
 )
+from wbc.estimation.estimator_config import EstimatorConfig
 from wbc.estimation.estimators import make_estimator
 from wbc.estimation.invariant_ekf import InvariantEkf, InvariantEkfConfig
-from wbc.estimation.state_estimator import EstimatorConfig, StateEstimate, StateEstimator
+from wbc.estimation.state_estimate import StateEstimate
+from wbc.estimation.state_estimator import StateEstimator
 from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
 from wbc.model.joint_map import JointMap
 from wbc.model.leg_kinematics import LegKinematics
 from wbc.model.support_polygon import SupportPolygon
 from wbc.motions.leg_lift import LegLift, LegLiftTiming, LiftPhase
 from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.sdk_low_state import SdkLowState, sensor_record_from_message
+from wbc.robot_io.sdk_motor_command import SdkMotorCommand
 from wbc.robot_io.sensor_record import SensorRecord
-from wbc.robot_io.unitree_sdk import SdkLowState, SdkMotorCommand, sensor_record_from_message
 
 __all__ = [
     "FOOT_FRAMES",
@@ -46,9 +58,12 @@ __all__ = [
     "LEGS",
     "BalanceController",
     "ConfigurationError",
+    "ContactSchedule",
+    "ContactSettings",
     "ControlOutput",
     "ControlStatus",
     "ControllerConfig",
+    "CostWeights",
     "DescriptionNotFoundError",
     "EstimatorConfig",
     "Go2Description",
@@ -61,6 +76,7 @@ __all__ = [
     "LegLift",
     "LegLiftTiming",
     "LiftPhase",
+    "LimitSettings",
     "MotorCommand",
     "NonFiniteError",
     "PlacoController",
@@ -70,9 +86,12 @@ __all__ = [
     "SdkLowState",
     "SdkMotorCommand",
     "SensorRecord",
+    "ShapingSettings",
+    "SolverSettings",
     "StateEstimate",
     "StateEstimator",
     "SupportPolygon",
+    "TaskGains",
     "UnknownNameError",
     "WbcError",
     "WholeBodyController",

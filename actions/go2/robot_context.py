@@ -69,10 +69,11 @@ class RobotContext:
 
     def com_margin_m(self) -> float:
         """Centre of mass's distance [m] inside the support polygon of the loaded feet."""
-        legs = self.controller.support_legs()
+        legs = self.controller.schedule.support_legs()
         if len(legs) < 3:
             return -math.inf
-        points = np.array([self.controller.foot_position(leg)[:2] for leg in legs])
+        feet = self.controller.foot_positions()
+        points = np.array([feet[LEGS.index(leg), :2] for leg in legs])
         return SupportPolygon.signed_distance(points, self.controller.com_position())
 
     def capture_margin_m(self) -> float:
@@ -85,7 +86,7 @@ class RobotContext:
         robot cannot stop without changing its support (here: putting the raised foot down).
         """
         controller = self.controller
-        legs = controller.support_legs()
+        legs = controller.schedule.support_legs()
         count = len(legs)
         if count < 3:
             return -math.inf
@@ -93,8 +94,8 @@ class RobotContext:
         support = self._support_rows.get(key)
         if support is None:
             support = self._support_rows[key] = np.array([LEGS.index(leg) for leg in legs])
-        weight = controller.total_mass_kg * _GRAVITY
-        shrink = max(0.0, 1.0 - count * controller.min_normal_force_n / weight)
+        weight = controller.description.total_mass * _GRAVITY
+        shrink = max(0.0, 1.0 - count * controller.schedule.min_normal_force_n / weight)
         return capture_point_margin(controller.foot_positions(), support,
                                     controller.com_position(), controller.com_velocity(),
                                     shrink, _GRAVITY)
@@ -105,7 +106,8 @@ class RobotContext:
 
     def is_standing(self) -> bool:
         """Four feet in stance, base at standing height and level."""
-        return (len(self.controller.stance_legs) == 4 and self.q[2] > STANDING_HEIGHT_M
+        return (len(self.controller.schedule.stance_legs) == len(LEGS)
+                and self.q[2] > STANDING_HEIGHT_M
                 and self.tilt_deg() < 5.0)
 
     def balance_problem(self) -> str:

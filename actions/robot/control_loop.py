@@ -63,9 +63,9 @@ class ControlLoop:
             aliases: The robot's joint names mapped to the description's, where they differ.
             state: ``estimate`` (the default: the state estimator on the robot's sensors) or
                 ``truth`` (the robot's exact state: simulators only).
-            estimator: The state estimator (by default :mod:`wbc.estimation.estimators`' default for the
-                controller's control period); started here on the robot's first sample, on
-                four loaded feet.
+            estimator: The state estimator (by default :mod:`wbc.estimation.estimators`' default
+                for the controller's control period); started here on the robot's first sample,
+                on four loaded feet.
 
         Raises:
             UnknownNameError: An unknown ``state``.
@@ -89,8 +89,8 @@ class ControlLoop:
         if state == "truth":
             q, v = self.robot.read_state()
         else:
-            period = getattr(getattr(controller, "config", None), "control_period_s", 1e-3)
-            self.estimator = estimator or make_estimator(control_period_s=period)
+            self.estimator = estimator or make_estimator(
+                control_period_s=controller.control_period_s)
             record = self.robot.read_sensors()
             if record is None:
                 raise ConfigurationError(
@@ -125,7 +125,7 @@ class ControlLoop:
     def estimate_state(self, record: SensorRecord | None) -> tuple[np.ndarray, np.ndarray]:
         """The estimator's tick on ``record`` (``None``: no sample this period) and the
         controller's contact schedule; ``(q, v)`` as new arrays."""
-        self.controller.normal_force_bounds(self._bounds)
+        self.controller.schedule.normal_force_bounds(self._bounds)
         estimate = self.estimator.update(record, self._bounds)
         return estimate.q.copy(), estimate.v.copy()
 

@@ -24,7 +24,7 @@ from wbc import (
     make_estimator,
 )
 
-reveal_type(WholeBodyController)  # expect: -> wbc.controller.whole_body_controller.WholeBodyController
+reveal_type(WholeBodyController)  # expect: whole_body_controller.WholeBodyController
 controller = WholeBodyController(ControllerConfig())
 reveal_type(controller.step)  # expect: -> wbc.controller.control_output.ControlOutput
 q = Go2Description().pose("standing")

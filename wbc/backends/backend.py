@@ -20,6 +20,8 @@ class QpBackend(abc.ABC):
 
     #: Registry name.
     name: str = ""
+    #: The solver's name in messages (``"DAQP"``); the registry name when empty.
+    solver_name: str = ""
 
     @abc.abstractmethod
     def setup(self, problem: QpProblem) -> None:
@@ -29,7 +31,7 @@ class QpBackend(abc.ABC):
     def solve(self, problem: QpProblem) -> QpResult:
         """Solve the current ``problem``."""
 
-    def prepare(self, problem: QpProblem) -> None:
+    def prepare(self, problem: QpProblem) -> None:  # noqa: B027 - optional hook, no-op default
         """Build, ahead of its first solve, what solving ``problem`` needs, without changing
         what the next solve of another problem uses (a controller prepares the layouts it
         may switch to). Nothing by default."""

@@ -191,6 +191,7 @@ class DaqpBackend(QpBackend):
     """
 
     name = "daqp"
+    solver_name = "DAQP"
     #: Whether direct calls work on this installation (decided on first use).
     _direct_ok: bool | None = None
 

@@ -33,11 +33,12 @@ class OsqpBackend(QpBackend):
     """
 
     name = "osqp"
+    solver_name = "OSQP"
 
     def __init__(self, *, eps_abs: float = 1e-7, eps_rel: float = 1e-7, max_iter: int = 20000,
                  polish: bool = True):
-        self.settings = dict(eps_abs=eps_abs, eps_rel=eps_rel, max_iter=max_iter,
-                             polishing=polish, verbose=False, warm_starting=True)
+        self.settings = {"eps_abs": eps_abs, "eps_rel": eps_rel, "max_iter": max_iter,
+                         "polishing": polish, "verbose": False, "warm_starting": True}
         self._solver = None
         self._shape: tuple[int, int] | None = None
 

@@ -38,6 +38,7 @@ class QpsolversBackend(QpBackend):
     def __init__(self, solver: str):
         self.solver = solver
         self.name = f"qpsolvers:{solver}"
+        self.solver_name = f"{solver} (qpsolvers)"
 
     def setup(self, problem: QpProblem) -> None:
         """Nothing to keep between ticks."""
@@ -67,7 +68,10 @@ class QpsolversBackend(QpBackend):
                                                **_SETTINGS.get(self.solver, {}))
             x, found = solution.x, bool(solution.found)
             reason = "" if found else f"{self.solver}: no solution found"
-        except Exception as err:  # a solver's own error must not escape the control loop
+        except Exception as err:  # noqa: BLE001 - eleven third-party solvers, any error type
+            # qpsolvers wraps only some solver errors in its QPError; others come through in the
+            # solver's own types (ValueError, ArithmeticError, RuntimeError, extension errors),
+            # and a failed solve must reach the controller as found=False, not as an exception.
             x, found, reason = None, False, f"{self.solver}: {type(err).__name__}: {err}"
         elapsed = time.perf_counter() - start
         if x is None or not np.all(np.isfinite(x)):

@@ -1,3 +1,3 @@
-"""The whole-body controller: its configuration, contact modes, QP problem and kernels, motor
-command shaping, and the simpler controllers beside it.
+"""The whole-body controller and its parts: configuration, contact schedule, the QP's problem,
+plans and kernels, failure recovery, motor command shaping, and the simpler controllers beside it.
 """

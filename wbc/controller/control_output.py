@@ -1,4 +1,4 @@
-"""What one control tick returns: the motor command, torques, accelerations, forces, errors, status, timings."""
+"""What one control tick returns: the motor command, torques, accelerations, forces, status."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ class ControlStatus(enum.Enum):
 
     #: The QP was solved; ``tau`` is the whole-body command.
     OK = "ok"
-    #: The backend failed on a feasible QP; ``tau`` is a fresh DAQP solution of it.
+    #: The backend failed on a feasible QP; ``tau`` solves it with a fresh workspace of the
+    #: configured backend.
     RESOLVED = "resolved"
     #: The QP was infeasible; ``tau`` solves it with the named limit group relaxed (and is
     #: clipped to the torque limits): the safest command while the robot is pushed hard.
@@ -29,9 +30,9 @@ class ControlStatus(enum.Enum):
 class ControlOutput(MotorCommand):
     """The result of :meth:`wbc.WholeBodyController.step`. Never ``None``.
 
-    It is a :class:`~wbc.robot_io.motor_command.MotorCommand` (``q_des``, ``dq_des``, ``kp``, ``kd``,
-    ``tau_ff``, description order), the command a robot's motor drivers take, plus what
-    the tick found.
+    It is a :class:`~wbc.robot_io.motor_command.MotorCommand` (``q_des``, ``dq_des``, ``kp``,
+    ``kd``, ``tau_ff``, description order), the command a robot's motor drivers take, plus
+    what the tick found.
     """
 
     #: The torque [N m] (12,) the command gives at the measured state, clipped at the
@@ -53,13 +54,14 @@ class ControlOutput(MotorCommand):
 
     @classmethod
     def damped_hold(cls, tau_good: np.ndarray, v: np.ndarray, *, damping: float,
-                    tau_max: np.ndarray, message: str, elapsed_s: float,
+                    tau_max: np.ndarray, message: str, elapsed_s: float, contacts: int,
                     group: str = "", q_joints: np.ndarray | None = None) -> ControlOutput:
         """The safe fallback: the last good torques with joint damping, inside the limits.
 
         As a motor command: ``tau_ff`` the last good torques, ``kd = damping`` towards zero
         velocity, ``kp = 0`` (``q_des`` is the last measured position, or zero, and unused).
-        Non-finite joint velocities (a broken sensor) are taken as zero in ``tau``.
+        Non-finite joint velocities (a broken sensor) are taken as zero in ``tau``; the
+        ``contacts`` forces are NaN (unknown).
         """
         n = len(tau_good)
         v = np.asarray(v, dtype=float).reshape(-1)
@@ -73,7 +75,7 @@ class ControlOutput(MotorCommand):
             q_des[:] = q_joints
         return cls(q_des=q_des, dq_des=np.zeros(n), kp=np.zeros(n), kd=np.full(n, damping),
                    tau_ff=tau_ff, tau=tau, qdd=np.full(n + 6, np.nan),
-                   forces=np.full((4, 3), np.nan), status=ControlStatus.FALLBACK,
+                   forces=np.full((contacts, 3), np.nan), status=ControlStatus.FALLBACK,
                    message=message, infeasible_group=group, timings={"total": elapsed_s})
 
     @property

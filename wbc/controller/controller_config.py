@@ -1,34 +1,54 @@
-"""Every gain, weight, limit and choice of the whole-body controller, validated."""
+"""Every gain, weight, limit and choice of the whole-body controller, validated, in parts."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
-from typing import ClassVar
+from functools import cached_property
+from typing import Any, ClassVar
 
 import numpy as np
 
 from wbc.core.errors import ConfigurationError, NonFiniteError
 from wbc.core.validation import as_float, known_fields_only
 
-#: ``(low, high, low_inclusive)`` ranges: ``[0, inf]``, that of every numeric field
-#: :attr:`ControllerConfig.RANGES` does not name, and ``(0, inf]``.
+#: ``(low, high, low_inclusive)`` ranges: ``[0, inf]``, that of every numeric field a part's
+#: ``RANGES`` does not name, and ``(0, inf]``.
 _NON_NEGATIVE = (0.0, None, True)
 _POSITIVE = (0.0, None, False)
+_Range = tuple[float, float | None, bool]
 
 
-@known_fields_only("controller parameter")
+class _Part:
+    """What every part of the configuration does: check its fields where it is built."""
+
+    #: ``(low, high, low_inclusive)`` of the numeric fields whose range is not ``[0, inf]``
+    #: (``None``: unbounded); a per-joint-type field's range is that of each of its values.
+    RANGES: ClassVar[dict[str, _Range]] = {}
+    #: Fields that hold one value per joint type (hip, thigh, calf).
+    PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ()
+
+    def __post_init__(self) -> None:
+        type(self)._check(self)
+
+    @classmethod
+    def _check(cls, config: Any) -> None:
+        """Check the fields this part declares, on ``config`` (the part or a whole config)."""
+        for f in fields(cls):  # type: ignore[arg-type]
+            if f.name in cls.PER_JOINT_TYPE:
+                _check_per_joint_type(config, f.name, cls.RANGES[f.name])
+            else:
+                _in_range(f.name, getattr(config, f.name), cls.RANGES.get(f.name, _NON_NEGATIVE))
+
+    @classmethod
+    def of(cls, config: Any) -> Any:
+        """This part's values taken from ``config`` (the whole configuration)."""
+        return cls(**{f.name: getattr(config, f.name) for f in fields(cls)})  # type: ignore[arg-type]
+
+
+@known_fields_only("solver setting")
 @dataclass(frozen=True)
-class ControllerConfig:
-    """Parameters of :class:`wbc.WholeBodyController`; defaults are tuned for the GO2.
-
-    Gains are per task: ``*_kp`` [1/s^2]; damping is critical (``2 sqrt(kp)``).
-    Weights are relative cost weights of the task terms.
-
-    Raises:
-        UnknownNameError: A keyword that is not a field (the message lists the fields).
-        ConfigurationError: A value of the wrong type or out of its range (the message names
-            the field and its range: :attr:`RANGES`, ``[0, inf]`` for the others).
-    """
+class SolverSettings(_Part):
+    """Which QP backend solves the tick, the QP's form, and the control period."""
 
     #: QP backend name (``wbc.backends.available_backends()`` lists them).
     backend: str = "daqp"
@@ -37,18 +57,29 @@ class ControllerConfig:
     eliminate_dynamics: bool = True
     #: Control period [s]; the controller is meant to run at 1 kHz.
     control_period_s: float = 1e-3
-    #: Friction coefficient of the contact model (below the floor's, for margin).
-    friction_coefficient: float = 0.6
-    #: Minimum normal force of a loaded stance foot [N].
-    min_normal_force_n: float = 8.0
-    #: Maximum normal force of a stance foot [N].
-    max_normal_force_n: float = 250.0
-    #: Fraction of the URDF effort limits the controller may use (0.9: 10% headroom).
-    torque_limit_fraction: float = 0.9
+
+    RANGES: ClassVar[dict[str, _Range]] = {"control_period_s": (1e-4, 0.01, True)}
+
+    @classmethod
+    def _check(cls, config: Any) -> None:
+        if not isinstance(config.backend, str) or not config.backend:
+            raise ConfigurationError(
+                f"backend: expected a backend name such as 'daqp' "
+                f"(wbc.backends.available_backends() lists the installed ones), "
+                f"received {config.backend!r}")
+        if not isinstance(config.eliminate_dynamics, bool):
+            raise ConfigurationError(f"eliminate_dynamics: expected True or False, "
+                                     f"received {config.eliminate_dynamics!r}")
+        _in_range("control_period_s", config.control_period_s, cls.RANGES["control_period_s"])
+
+
+@known_fields_only("task gain")
+@dataclass(frozen=True)
+class TaskGains(_Part):
+    """The tasks' PD gains: ``*_kp`` [1/s^2], damping critical (``2 sqrt(kp)``)."""
+
     com_kp: float = 150.0
-    com_weight: float = 20.0
     base_orientation_kp: float = 150.0
-    base_orientation_weight: float = 10.0
     #: Integral gain of the base orientation [1/s^3], on four loaded feet: pulls the base
     #: level against joint friction the model does not know. Off (0) by default: the motor
     #: command's joint PD does that job, and with it the integral made the joints hunt
@@ -57,11 +88,21 @@ class ControllerConfig:
     #: Bound of each component of the orientation error's integral [rad s] (anti-windup).
     base_orientation_integral_limit: float = 0.02
     foot_kp: float = 900.0
-    foot_weight: float = 30.0
     posture_kp: float = 25.0
-    posture_weight: float = 0.1
     #: Damping of a stance foot's residual velocity [1/s] (stops slip).
     contact_damping: float = 10.0
+
+
+@known_fields_only("cost weight")
+@dataclass(frozen=True)
+class CostWeights(_Part):
+    """The relative weights of the cost's terms: the tasks, the regularisation, the slack."""
+
+    com_weight: float = 20.0
+    base_orientation_weight: float = 10.0
+    #: A swinging foot's position task.
+    foot_weight: float = 30.0
+    posture_weight: float = 0.1
     #: Regularisation of the contact forces (pulls them towards an even split).
     force_weight: float = 1e-4
     #: Pull of the accelerations towards the previous tick's (smooth commands).
@@ -73,18 +114,64 @@ class ControllerConfig:
     torque_rate_weight: float = 1e-2
     #: Regularisation of the accelerations (keeps the QP strictly convex).
     acceleration_weight: float = 1e-6
+    #: Weight of the support-polygon slack (the constraint is soft).
+    support_slack_weight: float = 1e3
+
+
+@known_fields_only("contact setting")
+@dataclass(frozen=True)
+class ContactSettings(_Part):
+    """The contacts: friction, normal-force bounds, the support polygon's barrier."""
+
+    #: Friction coefficient of the contact model (below the floor's, for margin).
+    friction_coefficient: float = 0.6
+    #: Minimum normal force of a loaded stance foot [N].
+    min_normal_force_n: float = 8.0
+    #: Maximum normal force of a stance foot [N].
+    max_normal_force_n: float = 250.0
     #: Margin of the centre of mass inside the support polygon [m].
     support_margin_m: float = 0.015
     #: Natural frequency of the support-polygon barrier [rad/s].
     support_omega: float = 8.0
-    #: Weight of the support-polygon slack (the constraint is soft).
-    support_slack_weight: float = 1e3
+
+    RANGES: ClassVar[dict[str, _Range]] = {
+        "friction_coefficient": (0.0, 5.0, False),
+        "max_normal_force_n": _POSITIVE,
+        "support_omega": _POSITIVE,
+    }
+
+    @classmethod
+    def _check(cls, config: Any) -> None:
+        super()._check(config)
+        if config.min_normal_force_n >= config.max_normal_force_n:
+            raise ConfigurationError(
+                f"min_normal_force_n: expected less than max_normal_force_n "
+                f"({config.max_normal_force_n:g} N), received {config.min_normal_force_n:g} N")
+
+
+@known_fields_only("limit setting")
+@dataclass(frozen=True)
+class LimitSettings(_Part):
+    """How much of the robot's torque the QP may use, and how it keeps to the joint limits."""
+
+    #: Fraction of the URDF effort limits the controller may use (0.9: 10% headroom).
+    torque_limit_fraction: float = 0.9
     #: Horizon over which joint position limits become acceleration bounds [s].
     joint_limit_horizon_s: float = 0.05
-    #: Joint damping of the safe fallback command [N m s / rad].
-    fallback_damping: float = 2.0
-    # The motor command (see wbc.JointReference): the drivers' PD around the desired joint
-    # state integrated from the QP's accelerations, on top of the QP's torques.
+
+    RANGES: ClassVar[dict[str, _Range]] = {
+        "torque_limit_fraction": (0.0, 1.0, False),
+        "joint_limit_horizon_s": _POSITIVE,
+    }
+
+
+@known_fields_only("shaping setting")
+@dataclass(frozen=True)
+class ShapingSettings(_Part):
+    """The motor command (see :class:`wbc.JointReference`): the drivers' PD around the
+    desired joint state integrated from the QP's accelerations, on top of the QP's torques;
+    and the safe fallback command's damping."""
+
     #: Position gain of the joints of a stance leg [N m/rad].
     stance_kp: float = 40.0
     #: Velocity gain of the joints of a stance leg [N m s/rad].
@@ -103,6 +190,8 @@ class ControllerConfig:
     stance_leak_time_s: float = 0.2
     #: The same for a swinging leg [s]: long, so the PD keeps up with a lagging joint.
     swing_leak_time_s: float = 0.5
+    #: Joint damping of the safe fallback command [N m s / rad].
+    fallback_damping: float = 2.0
     #: Known viscous friction of the joints (hip, thigh, calf) [N m s/rad], added to the
     #: feed-forward torque along the desired velocity. Zero (the default) compensates none.
     known_joint_damping: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -113,17 +202,8 @@ class ControllerConfig:
     #: (a tanh: no chatter at rest).
     friction_velocity_scale_rad_s: float = 0.05
 
-    #: Fields that hold one value per joint type (hip, thigh, calf).
     PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ("known_joint_damping", "known_joint_friction")
-    #: ``(low, high, low_inclusive)`` of the numeric fields whose range is not ``[0, inf]``
-    #: (``None``: unbounded); a per-joint-type field's range is that of each of its values.
-    RANGES: ClassVar[dict[str, tuple[float, float | None, bool]]] = {
-        "control_period_s": (1e-4, 0.01, True),
-        "friction_coefficient": (0.0, 5.0, False),
-        "max_normal_force_n": _POSITIVE,
-        "torque_limit_fraction": (0.0, 1.0, False),
-        "joint_limit_horizon_s": _POSITIVE,
-        "support_omega": _POSITIVE,
+    RANGES: ClassVar[dict[str, _Range]] = {
         "stance_kp": (0.0, 500.0, True),
         "stance_kd": (0.0, 50.0, True),
         "swing_kp": (0.0, 500.0, True),
@@ -133,39 +213,110 @@ class ControllerConfig:
         "friction_velocity_scale_rad_s": _POSITIVE,
     }
 
+
+#: The parts in the order of :class:`ControllerConfig`'s fields, with the name each has there.
+PARTS: tuple[tuple[str, type[_Part]], ...] = (
+    ("solver", SolverSettings), ("gains", TaskGains), ("weights", CostWeights),
+    ("contacts", ContactSettings), ("limits", LimitSettings), ("shaping", ShapingSettings))
+
+
+@known_fields_only("controller parameter")
+@dataclass(frozen=True)
+class ControllerConfig(ShapingSettings, LimitSettings, ContactSettings, CostWeights, TaskGains,
+                       SolverSettings):
+    """Parameters of :class:`wbc.WholeBodyController`; defaults are tuned for the GO2.
+
+    It is made of parts, each the settings of one piece of the controller, which takes
+    only its part: :attr:`solver` (:class:`SolverSettings`), :attr:`gains`
+    (:class:`TaskGains`), :attr:`weights` (:class:`CostWeights`), :attr:`contacts`
+    (:class:`ContactSettings`, the contact schedule's), :attr:`limits`
+    (:class:`LimitSettings`) and :attr:`shaping` (:class:`ShapingSettings`, the motor
+    command's). Each parameter is declared once, in its part; the config holds them under
+    their own names, one flat namespace (a part is a base class here for that reason only):
+    ``ControllerConfig(com_kp=200.0)``, ``config.com_kp``, the command line's and the sweep
+    files' parameter names, ``dataclasses.fields(ControllerConfig)``. Build one from parts
+    with :meth:`from_parts`.
+
+    Raises:
+        UnknownNameError: A keyword that is not a field (the message lists the fields).
+        ConfigurationError: A value of the wrong type or out of its range (the message names
+            the field and its range: :attr:`RANGES`, ``[0, inf]`` for the others).
+    """
+
+    PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ShapingSettings.PER_JOINT_TYPE
+    RANGES: ClassVar[dict[str, _Range]] = {
+        name: bounds for _, part in PARTS for name, bounds in part.RANGES.items()}
+
     def __post_init__(self) -> None:
-        for f in fields(self):
-            if f.name == "backend":
-                if not isinstance(self.backend, str) or not self.backend:
-                    raise ConfigurationError(
-                        f"backend: expected a backend name such as 'daqp' "
-                        f"(wbc.backends.available_backends() lists the installed ones), "
-                        f"received {self.backend!r}")
-            elif f.name == "eliminate_dynamics":
-                if not isinstance(self.eliminate_dynamics, bool):
-                    raise ConfigurationError(f"eliminate_dynamics: expected True or False, "
-                                             f"received {self.eliminate_dynamics!r}")
-            elif f.name in self.PER_JOINT_TYPE:
-                self._check_per_joint_type(f.name)
-            else:
-                _in_range(f.name, getattr(self, f.name), self.RANGES.get(f.name, _NON_NEGATIVE))
-        if self.min_normal_force_n >= self.max_normal_force_n:
-            raise ConfigurationError(
-                f"min_normal_force_n: expected less than max_normal_force_n "
-                f"({self.max_normal_force_n:g} N), received {self.min_normal_force_n:g} N"
-            )
+        for _, part in PARTS:
+            part._check(self)
 
-    def _check_per_joint_type(self, name: str) -> None:
-        value = getattr(self, name)
-        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
-            raise ConfigurationError(
-                f"{name}: expected three numbers (hip, thigh, calf), received {value!r}")
-        for joint_type, item in zip(("hip", "thigh", "calf"), value):
-            _in_range(f"{name} ({joint_type})", item, self.RANGES[name])
-        object.__setattr__(self, name, tuple(float(item) for item in value))
+    @cached_property
+    def solver(self) -> SolverSettings:
+        """The backend, the QP's form and the control period."""
+        return SolverSettings.of(self)
+
+    @cached_property
+    def gains(self) -> TaskGains:
+        """The tasks' gains."""
+        return TaskGains.of(self)
+
+    @cached_property
+    def weights(self) -> CostWeights:
+        """The cost's weights."""
+        return CostWeights.of(self)
+
+    @cached_property
+    def contacts(self) -> ContactSettings:
+        """Friction, normal-force bounds, the support polygon."""
+        return ContactSettings.of(self)
+
+    @cached_property
+    def limits(self) -> LimitSettings:
+        """Torque and joint limits."""
+        return LimitSettings.of(self)
+
+    @cached_property
+    def shaping(self) -> ShapingSettings:
+        """The motor command's gains, bounds, leaks and known friction."""
+        return ShapingSettings.of(self)
+
+    @classmethod
+    def from_parts(cls, *, solver: SolverSettings | None = None, gains: TaskGains | None = None,
+                   weights: CostWeights | None = None, contacts: ContactSettings | None = None,
+                   limits: LimitSettings | None = None, shaping: ShapingSettings | None = None,
+                   **overrides: Any) -> ControllerConfig:
+        """A config of these parts (the defaults' for those not given), then ``overrides``
+        (flat names) changed: ``ControllerConfig.from_parts(gains=TaskGains(com_kp=200))``.
+
+        Raises:
+            ConfigurationError: A part of the wrong type (named), or as the constructor.
+        """
+        given = {"solver": solver, "gains": gains, "weights": weights, "contacts": contacts,
+                 "limits": limits, "shaping": shaping}
+        values: dict[str, Any] = {}
+        for name, part in PARTS:
+            value = given[name]
+            if value is None:
+                continue
+            if not isinstance(value, part) or isinstance(value, ControllerConfig):
+                raise ConfigurationError(f"{name}: expected a {part.__name__}, received "
+                                         f"{type(value).__name__}")
+            values.update({f.name: getattr(value, f.name) for f in fields(part)})
+        return config_with_overrides(cls(**values), overrides)
 
 
-def _in_range(name: str, value: object, bounds: tuple[float, float | None, bool]) -> None:
+def _check_per_joint_type(config: Any, name: str, bounds: _Range) -> None:
+    value = getattr(config, name)
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+        raise ConfigurationError(
+            f"{name}: expected three numbers (hip, thigh, calf), received {value!r}")
+    for joint_type, item in zip(("hip", "thigh", "calf"), value):
+        _in_range(f"{name} ({joint_type})", item, bounds)
+    object.__setattr__(config, name, tuple(float(item) for item in value))
+
+
+def _in_range(name: str, value: object, bounds: _Range) -> None:
     """Check one number against ``(low, high, low_inclusive)``; every message names the range."""
     low, high, low_inclusive = bounds
     interval = f"{'[' if low_inclusive else '('}{low:g}, {'inf' if high is None else f'{high:g}'}]"

@@ -30,7 +30,7 @@ class JointPdController:
         description: Go2Description | None = None,
     ):
         """Args:
-            q_ref: Reference configuration (19,) in Pinocchio convention.
+            q_ref: Reference configuration (nq,) in Pinocchio convention.
             kp: Joint stiffness [N m / rad].
             kd: Joint damping [N m s / rad].
             stance_legs: Legs assumed on the ground for gravity compensation.
@@ -39,7 +39,7 @@ class JointPdController:
         self.description = description or Go2Description.default()
         self.model = self.description.model
         self.data = self.model.createData()
-        self.q_ref = as_vector("q_ref", q_ref, 19)
+        self.q_ref = as_vector("q_ref", q_ref, self.model.nq)
         self.kp = as_float("kp", kp, low=0.0)
         self.kd = as_float("kd", kd, low=0.0)
         for leg in stance_legs:
@@ -47,7 +47,7 @@ class JointPdController:
         self._frames = [self.model.getFrameId(FOOT_FRAMES[leg]) for leg in stance_legs]
 
     def gravity_torques(self, q: np.ndarray) -> np.ndarray:
-        """Joint torques [N m] (12,) that hold configuration ``q`` at rest on the stance feet."""
+        """Joint torques [N m] (nv - 6,) that hold ``q`` at rest on the stance feet."""
         g = pin.computeGeneralizedGravity(self.model, self.data, q)
         if not self._frames:
             return g[6:].copy()
@@ -61,9 +61,9 @@ class JointPdController:
         return g[6:] - jac[:, 6:].T @ forces
 
     def compute(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Joint torques [N m] (12,), description order, for state ``(q, v)``."""
-        q = as_vector("q", q, 19)
-        v = as_vector("v", v, 18)
+        """Joint torques [N m] (nv - 6,), description order, for state ``(q, v)``."""
+        q = as_vector("q", q, self.model.nq)
+        v = as_vector("v", v, self.model.nv)
         return (self.kp * (self.q_ref[7:] - q[7:]) - self.kd * v[6:]
                 + self.gravity_torques(q))
 

@@ -1,4 +1,5 @@
-"""The desired joint state of the motor command: the QP's accelerations integrated, held near the measured state."""
+"""The motor command's desired joint state: the QP's accelerations integrated, kept near the
+measured state."""
 
 from __future__ import annotations
 
@@ -47,7 +48,7 @@ class JointReference:
         self._anchored = False
         self._offset = np.zeros(n)
 
-    def set_leak_time(self, joints: slice, leak_time_s: float) -> None:
+    def set_leak_time(self, joints: slice | list[int], leak_time_s: float) -> None:
         """Time constant [s] with which these joints' desired state decays towards the
         measured one (0: no decay, only the bounds)."""
         self._leak_time[joints] = as_float("leak_time_s", leak_time_s, low=0.0)

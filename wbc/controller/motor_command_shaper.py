@@ -1,17 +1,23 @@
-"""From a solved tick to the motor drivers' command: desired joint state, per-leg gains, feed-forward."""
+"""From a solved tick to the motor drivers' command: desired joint state, gains, feed-forward."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numba
 import numpy as np
 
-from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.controller_config import ShapingSettings
 from wbc.controller.joint_reference import JointReference
-from wbc.model.description import LEGS
+from wbc.core.errors import ConfigurationError
 
-_NJ = 12
-#: Joint-type index (0 hip, 1 thigh, 2 calf) of each joint, description order.
-_JOINT_TYPE = np.tile(np.arange(3), len(LEGS))
+#: The joint types of the per-joint-type settings, in their order.
+JOINT_TYPES = ("hip", "thigh", "calf")
+
+
+def joint_types(joint_names: Sequence[str]) -> list[int]:
+    """Each joint's type (0 hip, 1 thigh, 2 calf), from its name (``FR_thigh_joint``)."""
+    return [JOINT_TYPES.index(name.split("_")[1]) for name in joint_names]
 
 
 #: The inputs (measured state, QP outputs): any float64 vector, read-only or not.
@@ -47,7 +53,8 @@ def _shape(q, dq, qdd, tau_qp, dt, keep, max_position_error, max_velocity_error,
 
 
 class MotorCommandShaper:
-    """Builds the :class:`~wbc.robot_io.motor_command.MotorCommand` of a tick both controllers share.
+    """Builds the :class:`~wbc.robot_io.motor_command.MotorCommand` of a tick (both
+    controllers share it).
 
     - ``q_des``, ``dq_des``: the QP's joint accelerations integrated by a
       :class:`JointReference`, bounded around the measured state;
@@ -58,31 +65,45 @@ class MotorCommandShaper:
     - ``tau``: what that command gives at the measured state, clipped at the effort limits.
     """
 
-    def __init__(self, config: ControllerConfig, *, tau_max: np.ndarray,
-                 effort_limit: np.ndarray):
+    def __init__(self, settings: ShapingSettings, *, control_period_s: float,
+                 tau_max: np.ndarray, effort_limit: np.ndarray, joint_types: Sequence[int]):
         """Args:
-            config: Gains, bounds and the known joint friction.
-            tau_max: The controller's torque limits [N m] (12,): ``tau_ff`` stays inside.
-            effort_limit: The motors' effort limits [N m] (12,): ``tau`` is clipped at them.
+            settings: Gains, bounds, leaks and the known joint friction (a
+                :class:`ControllerConfig`'s ``shaping``).
+            control_period_s: How far ahead the reference is integrated [s].
+            tau_max: The controller's torque limits [N m] (joints,): ``tau_ff`` stays inside.
+            effort_limit: The motors' effort limits [N m] (joints,): ``tau`` is clipped there.
+            joint_types: Each joint's type, 0 hip, 1 thigh, 2 calf (the index into the
+                per-joint-type friction values).
         """
-        self.config = config
+        self.settings = settings
+        self.control_period_s = float(control_period_s)
+        types = np.asarray(joint_types, dtype=np.int64)
+        n = types.size
+        if np.shape(tau_max) != (n,) or np.shape(effort_limit) != (n,) or np.any(types < 0) \
+                or np.any(types > 2):
+            raise ConfigurationError(
+                f"joint_types: expected {n} types in 0..2 and limits of {n} joints each, "
+                f"received types {types.tolist()}, tau_max {np.shape(tau_max)} and "
+                f"effort_limit {np.shape(effort_limit)}")
         self.reference = JointReference(
-            _NJ, max_position_error_rad=config.reference_position_bound_rad,
-            max_velocity_error_rad_s=config.reference_velocity_bound_rad_s,
-            leak_time_s=config.stance_leak_time_s)
+            n, max_position_error_rad=settings.reference_position_bound_rad,
+            max_velocity_error_rad_s=settings.reference_velocity_bound_rad_s,
+            leak_time_s=settings.stance_leak_time_s)
         # Float64, C-contiguous, as the compiled shaping takes them: the caller's own arrays
         # when they already are (a caller that shares them with its QP keeps sharing).
         self.tau_max = np.ascontiguousarray(tau_max, dtype=float)
         self.effort_limit = np.ascontiguousarray(effort_limit, dtype=float)
-        self._damping = np.asarray(config.known_joint_damping, dtype=float)[_JOINT_TYPE]
-        self._friction = np.asarray(config.known_joint_friction, dtype=float)[_JOINT_TYPE]
-        self.kp = np.full(_NJ, config.stance_kp)
-        self.kd = np.full(_NJ, config.stance_kd)
+        self._damping = np.asarray(settings.known_joint_damping, dtype=float)[types]
+        self._friction = np.asarray(settings.known_joint_friction, dtype=float)[types]
+        self.kp = np.full(n, settings.stance_kp)
+        self.kd = np.full(n, settings.stance_kd)
+        self._out_shape = (6, n)
 
-    def set_stance(self, leg_index: int, stance: bool) -> None:
-        """Give a leg's three joints the stance or the swing gains."""
-        cfg = self.config
-        joints = slice(3 * leg_index, 3 * leg_index + 3)
+    def set_stance(self, joints: Sequence[int], stance: bool) -> None:
+        """Give a leg's joints (their indices) the stance or the swing gains and leak."""
+        cfg = self.settings
+        joints = list(joints)
         self.kp[joints] = cfg.stance_kp if stance else cfg.swing_kp
         self.kd[joints] = cfg.stance_kd if stance else cfg.swing_kd
         self.reference.set_leak_time(
@@ -93,15 +114,15 @@ class MotorCommandShaper:
         """The command's arrays (new ones, owned by the caller) for one solved tick.
 
         Args:
-            q: Measured joint positions [rad] (12,).
-            dq: Measured joint velocities [rad/s] (12,).
-            qdd: The QP's joint accelerations [rad/s^2] (12,).
-            tau_qp: The QP's joint torques [N m] (12,).
+            q: Measured joint positions [rad] (joints,).
+            dq: Measured joint velocities [rad/s] (joints,).
+            qdd: The QP's joint accelerations [rad/s^2] (joints,).
+            tau_qp: The QP's joint torques [N m] (joints,).
         """
-        reference, cfg = self.reference, self.config
-        keep = reference.prepare(q, dq, cfg.control_period_s)
-        out = np.empty((6, _NJ))  # the command owns its arrays: one block, six views
-        _shape(q, dq, qdd, tau_qp, cfg.control_period_s, keep, reference.max_position_error,
+        reference, cfg, dt = self.reference, self.settings, self.control_period_s
+        keep = reference.prepare(q, dq, dt)
+        out = np.empty(self._out_shape)  # the command owns its arrays: one block, six views
+        _shape(q, dq, qdd, tau_qp, dt, keep, reference.max_position_error,
                reference.max_velocity_error, reference.q_des, reference.dq_des, self._damping,
                self._friction, cfg.friction_velocity_scale_rad_s, self.tau_max, self.kp,
                self.kd, self.effort_limit, out)

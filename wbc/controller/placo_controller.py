@@ -1,4 +1,4 @@
-"""The same balance tasks solved by PlaCo's DynamicsSolver, behind the BalanceController protocol."""
+"""The same balance tasks solved by PlaCo's DynamicsSolver, behind the BalanceController."""
 
 from __future__ import annotations
 
@@ -10,63 +10,56 @@ import numpy as np
 import pinocchio as pin
 import placo
 
-from wbc.controller.contact_modes import ContactModes
+from wbc.controller.contact_schedule import ContactSchedule
 from wbc.controller.control_output import ControlOutput, ControlStatus
 from wbc.controller.controller_config import ControllerConfig, config_with_overrides
-from wbc.controller.motor_command_shaper import MotorCommandShaper
+from wbc.controller.foot_reach import FootReach
+from wbc.controller.motor_command_shaper import MotorCommandShaper, joint_types
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector, check_name
 from wbc.model.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 
-_NV, _NJ = 18, 12
 #: Smallest normal-force ratio the force-weight ramp divides by (caps the weight at 1e6x).
 MIN_FORCE_RATIO = 1e-3
 
 
-class PlacoController(ContactModes):
+class PlacoController:
     """Whole-body balance of the GO2 with ``placo.DynamicsSolver`` (one QP per tick).
 
     The tasks and contacts mirror :class:`wbc.WholeBodyController`, with the same
-    :class:`ControllerConfig` gains and weights; PlaCo builds and solves the QP (its own
-    eiquadprog, variables ``[qdd (18), one force (3) per active contact]``), so the QP
-    backend named in the config is ignored.
+    :class:`ControllerConfig` gains and weights and the same :class:`ContactSchedule`;
+    PlaCo builds and solves the QP (its own eiquadprog, variables ``[qdd (18), one force
+    (3) per active contact]``), so the configured QP backend is ignored. PlaCo's soft terms
+    cost ``weight/2 ||A x - b||^2`` like ours, so weights carry over one to one:
 
-    How the configuration maps (PlaCo's soft terms cost ``weight/2 ||A x - b||^2``, like
-    ours, so weights carry over one to one):
-
-    - CoM: ``add_com_task``, soft, ``com_weight``, ``kp = com_kp``, critical damping.
-    - Base orientation: ``add_orientation_task("base")``, soft, ``base_orientation_weight``,
+    - CoM: ``add_com_task``, soft, ``com_weight``, ``kp = com_kp``, critical damping. Base
+      orientation: ``add_orientation_task("base")``, soft, ``base_orientation_weight``,
       ``base_orientation_kp``; the target keeps the reset yaw with zero roll and pitch.
-    - Posture: one ``add_joints_task`` per joint (PlaCo's joints task has a single weight;
-      ours has per-joint multipliers), soft, ``posture_weight`` times the joint's multiplier,
-      ``posture_kp``. Twelve tasks instead of one cost PlaCo about 20 us a tick.
-    - One position task per foot (``FL_foot`` ...). A stance foot's task is *hard* with
-      ``kp = 0``, ``kd = contact_damping`` (the foot does not accelerate, residual velocity
-      is damped) and carries a unilateral point contact (``mu = friction_coefficient``,
-      force regularised by ``weight_forces = force_weight``). A swing foot's contact is
-      deactivated and its task becomes soft, ``foot_weight`` (or :meth:`set_foot_weight`'s),
-      ``foot_kp``.
-    - Torque limits: ``torque_limit_fraction`` of the URDF efforts via ``set_torque_limit``.
-    - Joint position and velocity limits: PlaCo's own (``enable_joint_limits``,
-      ``enable_velocity_limits``) with ``dt = joint_limit_horizon_s``: the velocity rows
-      then equal the reference's; the position rows use PlaCo's braking model
-      (``qdd_safe = 1 rad/s^2``) instead of the reference's constant-acceleration horizon.
-    - PlaCo's default torque cost (``torque_cost = 1e-3``) is set to zero: the reference
-      controller has no such term.
+    - Posture: one ``add_joints_task`` per joint (PlaCo's has a single weight, ours per-joint
+      multipliers), soft, ``posture_weight`` times the multiplier, ``posture_kp``. Twelve
+      tasks instead of one cost PlaCo about 20 us a tick.
+    - One position task per foot. A stance foot's is *hard*, ``kp = 0``, ``kd =
+      contact_damping``, with a unilateral point contact (``mu = friction_coefficient``,
+      ``weight_forces = force_weight``); a swing foot's contact is off and its task soft,
+      ``foot_weight`` (or :meth:`set_foot_weight`'s), ``foot_kp``.
+    - Torque limits: ``torque_limit_fraction`` of the URDF efforts (``set_torque_limit``).
+      Joint limits: PlaCo's own with ``dt = joint_limit_horizon_s`` (velocity rows equal to
+      the reference's; position rows by PlaCo's braking model, ``qdd_safe = 1 rad/s^2``).
+      PlaCo's torque cost (``1e-3``) is set to zero: the reference has no such term.
 
     What is *not* equivalent:
 
-    - No upper bound on a contact force exists in PlaCo 0.10.2. :meth:`set_max_normal_force`
-      instead raises the contact's force weight, ``force_weight / max(r, 1e-3)^2`` with
-      ``r = bound / full bound``: the load moves off the foot smoothly, but it is a penalty,
-      not a bound (the reference keeps the natural load until the bound reaches it). The
-      remaining load vanishes when :meth:`set_swing` deactivates the contact.
+    - No upper bound on a contact force exists in PlaCo 0.10.2: the schedule's bound (set or
+      ramped) raises the contact's force weight instead, ``force_weight / max(r, 1e-3)^2``
+      with ``r = bound / full bound``: the load moves off the foot smoothly, but by a
+      penalty, not a bound (the reference keeps the natural load until the bound reaches
+      it); the rest vanishes when the schedule's ``set_swing`` deactivates the contact.
     - No minimum normal force (PlaCo only has ``f_z >= 0``), no support-polygon barrier, no
-      acceleration/force rate terms, and no rolling-foot model: the contact point is the
-      foot sphere's centre (``radius_m = 0`` in :class:`tasks.ContactTask` terms).
+      acceleration/force rate terms, no rolling-foot model (the contact point is the foot
+      sphere's centre).
     - ``timings`` has ``model`` (``update_kinematics``), ``solve`` (PlaCo's task update,
-      assembly and solve together) and ``total``. :meth:`solution_violations` checks the
-      last solution on PlaCo's hard rows, off the hot path.
+      assembly and solve) and ``total``. :meth:`solution_violations` checks the last
+      solution on PlaCo's hard rows, off the hot path.
 
     Example:
         >>> controller = PlacoController()
@@ -90,6 +83,8 @@ class PlacoController(ContactModes):
         if list(robot.joint_names()) != list(JOINT_NAMES):
             raise ConfigurationError(
                 f"PlaCo joint order {list(robot.joint_names())} differs from {JOINT_NAMES}")
+        self._nv = robot.model.nv
+        self._nj = self._nv - 6
         self.tau_max = cfg.torque_limit_fraction * self.description.effort_limit
 
         self.solver = solver = placo.DynamicsSolver(robot)
@@ -115,8 +110,8 @@ class PlacoController(ContactModes):
         for task, kp in ((self.com_task, cfg.com_kp), (self.base_task, cfg.base_orientation_kp),
                          *((t, cfg.posture_kp) for t in self.posture_tasks)):
             task.kp, task.kd = kp, 2.0 * math.sqrt(kp)
-        self._posture = np.zeros(_NJ)
-        self.set_posture_weights(np.ones(_NJ))
+        self._posture = np.zeros(self._nj)
+        self.set_posture_weights(np.ones(self._nj))
         self.foot_tasks = {}
         self.contacts = {}
         for leg in LEGS:
@@ -126,13 +121,20 @@ class PlacoController(ContactModes):
             contact.mu = cfg.friction_coefficient
             self.foot_tasks[leg], self.contacts[leg] = task, contact
         self._q: np.ndarray | None = None
-        self.motor = MotorCommandShaper(cfg, tau_max=self.tau_max,
-                                        effort_limit=self.description.effort_limit)
-        self._init_contact_modes()
+        self.motor = MotorCommandShaper(cfg.shaping, control_period_s=cfg.control_period_s,
+                                        tau_max=self.tau_max,
+                                        effort_limit=self.description.effort_limit,
+                                        joint_types=joint_types(JOINT_NAMES))
         self._foot_weight = dict.fromkeys(LEGS, cfg.foot_weight)
+        self._leg_joints = {leg: self.description.leg_joint_indices(leg) for leg in LEGS}
+        self.reach = FootReach(self.description, LEGS)
+        #: Which feet stand, their force bounds and the ramps (PlaCo's contacts follow it).
+        self.schedule = ContactSchedule(LEGS, cfg.contacts,
+                                        control_period_s=cfg.control_period_s,
+                                        listener=self._configure_foot)
         for leg in LEGS:
             self._configure_foot(leg)
-        self._tau_good = np.zeros(_NJ)
+        self._tau_good = np.zeros(self._nj)
         self._last: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.ticks = 0
         self.failures = 0
@@ -140,25 +142,21 @@ class PlacoController(ContactModes):
     # ------------------------------------------------------------------ references
 
     def reset(self, q: np.ndarray, v: np.ndarray | None = None) -> None:
-        """Hold the given state: every target is set from it, all four feet in stance.
-
-        The base orientation target keeps the current yaw with zero roll and pitch.
-        """
+        """Hold the given state: every target from it (the base level at its yaw), every
+        foot in stance."""
         q = as_vector("q", q, self.robot.model.nq)
-        v = np.zeros(_NV) if v is None else as_vector("v", v, _NV)
+        v = np.zeros(self._nv) if v is None else as_vector("v", v, self._nv)
         self._update_model(q, v)
         robot = self.robot
         self.set_com_target(robot.com_world())
         yaw = pin.rpy.matrixToRpy(robot.get_T_world_frame("base")[:3, :3])[2]
         self.base_task.R_world_frame = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
         self.set_posture_target(q[7:])
-        self.set_posture_weights(np.ones(_NJ))
+        self.set_posture_weights(np.ones(self._nj))
         for leg in LEGS:
             self.set_foot_target(leg, self.foot_position(leg))
-            self._stance[leg] = True
-            self._max_force[leg] = self.config.max_normal_force_n
             self._foot_weight[leg] = self.config.foot_weight
-            self._configure_foot(leg)
+        self.schedule.reset()  # every foot configured again
         result = self.solver.solve(False)
         self._tau_good = (np.array(result.tau[6:]) if result.success
                           else robot.static_gravity_compensation_torques("base")[6:].copy())
@@ -173,33 +171,36 @@ class PlacoController(ContactModes):
 
     @property
     def posture_target(self) -> np.ndarray:
-        """Joint posture target [rad] (12,), description order (a copy)."""
+        """Joint posture target [rad], description order (a copy)."""
         return self._posture.copy()
 
     def set_posture_target(self, joint_positions: np.ndarray,
                            velocity: np.ndarray | None = None,
                            acceleration: np.ndarray | None = None) -> None:
-        """Joint posture target [rad], velocity [rad/s] and feed-forward [rad/s^2] (12,)."""
-        target = as_vector("posture target", joint_positions, _NJ)
-        rate = np.zeros(_NJ) if velocity is None else as_vector("posture velocity", velocity, _NJ)
-        accel = (np.zeros(_NJ) if acceleration is None
-                 else as_vector("posture acceleration", acceleration, _NJ))
+        """Joint posture target [rad], velocity [rad/s] and feed-forward [rad/s^2]."""
+        n = self._nj
+        target = as_vector("posture target", joint_positions, n)
+        rate = np.zeros(n) if velocity is None else as_vector("posture velocity", velocity, n)
+        accel = (np.zeros(n) if acceleration is None
+                 else as_vector("posture acceleration", acceleration, n))
         for task, name, *values in zip(self.posture_tasks, JOINT_NAMES, target, rate, accel):
             task.set_joint(name, *map(float, values))
         self._posture = target
 
     def set_posture_weights(self, weights: np.ndarray) -> None:
-        """Per-joint multipliers (12,) of the posture weight; ones restore the default."""
-        weights = as_vector("posture weights", weights, _NJ)
+        """Per-joint multipliers of the posture weight; ones restore the default."""
+        weights = as_vector("posture weights", weights, self._nj)
         if np.any(weights < 0.0):
             raise ConfigurationError(
                 f"posture weights: expected values >= 0, received {weights.tolist()}")
         for task, name, weight in zip(self.posture_tasks, JOINT_NAMES, weights):
             task.configure(f"posture {name}", "soft", self.config.posture_weight * float(weight))
 
-    def set_foot_weight(self, leg: str, weight: float) -> None:
-        """Weight of a swing foot's position task (0 hands the leg to the posture task)."""
+    def set_foot_weight(self, leg: str, weight: float | None = None) -> None:
+        """Weight of a swing foot's position task (0 hands the leg to the posture task;
+        ``None`` restores the configured ``foot_weight``)."""
         check_name("leg", leg, LEGS)
+        weight = self.config.foot_weight if weight is None else weight
         self._foot_weight[leg] = as_float(f"{leg} foot weight", weight, low=0.0)
         self._configure_foot(leg)
 
@@ -214,7 +215,8 @@ class PlacoController(ContactModes):
 
     def com_velocity(self) -> np.ndarray:
         """Centre-of-mass velocity [m/s] at the last state."""
-        return np.asarray(self.robot.com_jacobian() @ self.robot.state.qd, dtype=float).reshape(3)
+        robot = self.robot
+        return np.asarray(robot.com_jacobian() @ robot.state.qd, dtype=float).reshape(3)
 
     def foot_position(self, leg: str) -> np.ndarray:
         """World position [m] of a foot frame (sphere centre) at the last state."""
@@ -222,11 +224,11 @@ class PlacoController(ContactModes):
         return self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3].copy()
 
     def foot_positions(self) -> np.ndarray:
-        """World positions (4, 3) [m] of the foot frames at the last state, ``LEGS`` order."""
+        """World positions (legs, 3) [m] of the foot frames at the last state, legs' order."""
         return np.array([self.robot.get_T_world_frame(FOOT_FRAMES[leg])[:3, 3] for leg in LEGS])
 
     def foot_target(self, leg: str) -> np.ndarray | None:
-        """A foot's world position target [m] (a copy): where the foot is held while it swings."""
+        """A foot's world position target [m] (a copy): where it is held while it swings."""
         check_name("leg", leg, LEGS)
         return np.array(self.foot_tasks[leg].target_world, dtype=float).reshape(3)
 
@@ -234,16 +236,11 @@ class PlacoController(ContactModes):
                         velocity: np.ndarray | None = None,
                         acceleration: np.ndarray | None = None, *,
                         clamp_to_reach: bool = False) -> None:
-        """World target [m], velocity [m/s] and feed-forward acceleration of a foot.
-
-        Tracked while the leg swings. With ``clamp_to_reach`` a target beyond the leg's
-        reach is moved onto it instead of raising.
-
-        Raises:
-            ReachabilityError: The target is farther than :data:`LEG_REACH_M` from the leg's
-                shoulder at the last state; the target is left unchanged.
-        """
-        position = self._reachable_target(leg, position, clamp_to_reach)
+        """World target [m], velocity [m/s] and feed-forward acceleration of a foot, tracked
+        while it swings; beyond the leg's reach it is refused (``ReachabilityError``, the
+        target unchanged) or, with ``clamp_to_reach``, moved onto it."""
+        position = self.reach.reachable_target(leg, position, self._base_placement(),
+                                               clamp=clamp_to_reach)
         task = self.foot_tasks[leg]
         task.target_world = position
         task.dtarget_world = _vector_or_zero(f"{leg}_foot velocity", velocity)
@@ -252,9 +249,7 @@ class PlacoController(ContactModes):
     def normal_force(self, leg: str) -> float:
         """The normal force [N] the last solved tick gave a foot (0 before any)."""
         check_name("leg", leg, LEGS)
-        if getattr(self, "_last", None) is None:
-            return 0.0
-        return float(self._last[2][LEGS.index(leg), 2])
+        return 0.0 if self._last is None else float(self._last[2][LEGS.index(leg), 2])
 
     def _base_placement(self) -> tuple[np.ndarray, np.ndarray] | None:
         if self._q is None:
@@ -262,17 +257,39 @@ class PlacoController(ContactModes):
         T_world_base = self.robot.get_T_world_frame("base")
         return T_world_base[:3, :3], T_world_base[:3, 3]
 
-    def _contact_mode_changed(self, leg: str) -> None:
-        self._configure_foot(leg)
+    @property
+    def control_period_s(self) -> float:
+        """The period [s] the controller runs at (its motor command integrates over it)."""
+        return self.config.control_period_s
+
+    def shoulder_position(self, leg: str) -> np.ndarray:
+        """World position [m] of a leg's shoulder (fixed to the base) at the last state."""
+        return self.reach.shoulder_position(leg, self._base_placement())
+
+    @property
+    def stance_legs(self) -> list[str]:
+        """Legs in stance (the schedule's)."""
+        return self.schedule.stance_legs
+
+    def support_legs(self) -> list[str]:
+        """Fully loaded stance legs: the support polygon's corners (the schedule's)."""
+        return self.schedule.support_legs()
+
+    def normal_force_bounds(self, out: np.ndarray) -> np.ndarray:
+        """Each foot's normal-force bound [N] into ``out``, 0 in swing (the schedule's)."""
+        return self.schedule.normal_force_bounds(out)
 
     def _configure_foot(self, leg: str) -> None:
-        """Stance: hard zero-acceleration task with a contact; swing: soft tracking task."""
+        """The schedule's listener. Stance: hard zero-acceleration task with a contact, its
+        force weighted by the bound; swing: soft tracking task."""
         cfg, task, contact = self.config, self.foot_tasks[leg], self.contacts[leg]
-        self.motor.set_stance(LEGS.index(leg), self._stance[leg])
-        if self._stance[leg]:
+        stance = self.schedule.is_stance(leg)
+        self.motor.set_stance(self._leg_joints[leg], stance)
+        if stance:
             task.configure(f"{leg}_contact", "hard", 1.0)
             task.kp, task.kd = 0.0, cfg.contact_damping
-            ratio = max(self._max_force[leg] / cfg.max_normal_force_n, MIN_FORCE_RATIO)
+            ratio = max(self.schedule.max_normal_force(leg) / cfg.max_normal_force_n,
+                        MIN_FORCE_RATIO)
             contact.weight_forces = cfg.force_weight / (ratio * ratio)
             contact.active = True
         else:
@@ -283,19 +300,17 @@ class PlacoController(ContactModes):
     # ------------------------------------------------------------------ the tick
 
     def step(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
-        """One control tick: PlaCo's kinematics update and QP solve (no integration).
-
-        Never raises on bad numbers in the state or a failed solve: it returns the safe
-        fallback command (joint damping around the last good torques) with status
-        ``FALLBACK`` and a message.
-        """
+        """One control tick: PlaCo's kinematics update and QP solve (no integration). Never
+        raises on bad numbers in the state or a failed solve: it returns the safe fallback
+        command (joint damping around the last good torques), status ``FALLBACK``."""
         t0 = time.perf_counter()
         self.ticks += 1
+        self.schedule.advance()  # a ramping bound re-weighs its contact
         q = np.asarray(q, dtype=float)
         v = np.asarray(v, dtype=float)
-        nq = self.robot.model.nq
-        if q.shape != (nq,) or v.shape != (_NV,):
-            return self._fallback(v, f"state: expected q {(nq,)} and v {(_NV,)}, "
+        nq, nv = self.robot.model.nq, self._nv
+        if q.shape != (nq,) or v.shape != (nv,):
+            return self._fallback(v, f"state: expected q {(nq,)} and v {(nv,)}, "
                                      f"received {q.shape} and {v.shape}", t0)
         if not (np.isfinite(q).all() and np.isfinite(v).all()):
             bad = [f"q[{i}]" for i in np.flatnonzero(~np.isfinite(q))]
@@ -316,7 +331,7 @@ class PlacoController(ContactModes):
             return self._fallback(v, "PlaCo returned non-finite torques or accelerations", t0)
         forces = np.zeros((len(LEGS), 3))
         for i, leg in enumerate(LEGS):
-            if self._stance[leg]:
+            if self.schedule.is_stance(leg):
                 forces[i] = np.asarray(self.contacts[leg].wrench, dtype=float).reshape(3)
         tau_qp = tau_full[6:]
         self._tau_good = tau_qp
@@ -336,13 +351,10 @@ class PlacoController(ContactModes):
         self._q = q
 
     def solution_violations(self) -> tuple[float, float]:
-        """Largest equality and inequality violation of the last solution on PlaCo's hard rows.
-
-        Equalities: the floating base's torque and the stance feet's acceleration tasks;
-        inequalities: torque limits, unilateral and friction rows. Off the hot path: call it
-        right after :meth:`step`, before the contacts change. ``(nan, nan)`` when the last
-        tick fell back.
-        """
+        """Largest equality (floating-base torque, stance feet's accelerations) and
+        inequality (torque limits, unilateral and friction rows) violation of the last
+        solution on PlaCo's hard rows; ``(nan, nan)`` after a fallback. Off the hot path:
+        call it right after :meth:`step`, before the contacts change."""
         if self._last is None:
             return math.nan, math.nan
         tau_full, qdd, forces = self._last
@@ -350,7 +362,7 @@ class PlacoController(ContactModes):
         mu = self.config.friction_coefficient
         ineq = float(max((np.abs(tau_full[6:]) - self.tau_max).max(), 0.0))
         for i, leg in enumerate(LEGS):
-            if not self._stance[leg]:
+            if not self.schedule.is_stance(leg):
                 continue
             task = self.foot_tasks[leg]
             residual = np.asarray(task.A) @ qdd - np.asarray(task.b).reshape(-1)
@@ -364,7 +376,7 @@ class PlacoController(ContactModes):
                   "base_orientation": float(np.linalg.norm(self.base_task.error)),
                   "posture": float(np.linalg.norm(self._posture - q[7:]))}
         for leg in LEGS:
-            if not self._stance[leg]:
+            if not self.schedule.is_stance(leg):
                 errors[f"{leg}_foot"] = float(np.linalg.norm(self.foot_tasks[leg].error))
         return errors
 
@@ -379,7 +391,7 @@ class PlacoController(ContactModes):
         self.motor.reference.release()
         return ControlOutput.damped_hold(
             self._tau_good, v, damping=self.config.fallback_damping, tau_max=self.tau_max,
-            message=message, elapsed_s=time.perf_counter() - t0,
+            message=message, elapsed_s=time.perf_counter() - t0, contacts=len(LEGS),
             q_joints=None if self._q is None else self._q[7:])
 
 

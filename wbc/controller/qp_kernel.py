@@ -1,4 +1,4 @@
-"""Compiled stages of the QP builder: stacking task costs, and the contact-consistent reduction.
+"""Compiled stages of the QP builder: the contact-consistent reduction of the full QP.
 
 Each function is one stage over arrays allocated once per variable layout; none allocates.
 The reduction eliminates the floating-base equations of motion and the stance contacts:
@@ -11,94 +11,104 @@ decision variable is then affine in ``z = [swing joints' qdd, contact forces, sl
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
+import numpy as np
+
+from wbc.controller.cost_kernels import (
+    accumulate_tasks,
+    add_diagonal_cost,
+    add_row_least_squares,
+    mirror_upper,
+)
 
 INF = 1e30
 #: Below this |determinant| (or pivot) the reduction declines and the full QP is solved.
 SINGULAR = 1e-9
 
 
-@numba.njit(cache=True)
-def accumulate_tasks(J, drift, desired, row_weights, row_task, gains, active, T, t0, H, f, g):
-    """``H += w (J T)^T (J T)``, ``f += w (J T)^T (J t0 + drift - desired)`` per task row.
-
-    Args:
-        J (R, nv), drift (R,), desired (R,), row_weights (R,): the stacked task rows.
-        row_task (R,): the task of each row; gains (tasks, 3): kp, kd, weight per task;
-            active (tasks,): which tasks are in the QP.
-        T (n, nz), t0 (n,): the map from the QP's variables to ``x`` (its first nv entries
-            are ``qdd``).
-        H (nz, nz), f (nz,): accumulated (upper triangle of ``H``).
-        g (nz,): scratch.
-    """
-    nz = T.shape[1]
-    nv = J.shape[1]
-    for r in range(J.shape[0]):
-        t = row_task[r]
-        if not active[t]:
-            continue
-        w = gains[t, 2] * row_weights[r]
-        if w == 0.0:
-            continue
-        g[:] = 0.0
-        residual = drift[r] - desired[r]
-        for k in range(nv):
-            a = J[r, k]
-            if a != 0.0:
-                residual += a * t0[k]
-                for j in range(nz):
-                    g[j] += a * T[k, j]
-        for i in range(nz):
-            wg = w * g[i]
-            if wg != 0.0:
-                f[i] += wg * residual
-                for j in range(i, nz):
-                    H[i, j] += wg * g[j]
+# The kernels' arguments, grouped by where they come from; each group is gathered once per
+# tick plan (one variable layout) and its arrays are updated in place.
 
 
-@numba.njit(cache=True)
-def add_diagonal_cost(weights, rate_weights, x_prev, T, t0, H, f):
-    """Cost ``1/2 sum_k weights_k x_k^2 - rate_weights_k x_prev_k x_k`` with ``x = T z + t0``.
+class Dynamics(NamedTuple):
+    """The robot's mass matrix (nv, nv) and nonlinear effects (nv,) at the last state."""
 
-    ``weights`` holds the regularisation plus the rate weights, so with ``rate_weights``
-    this is ``1/2 |x|^2_reg + 1/2 |x - x_prev|^2_rate`` up to a constant.
-    """
-    nz = T.shape[1]
-    for k in range(T.shape[0]):
-        d = weights[k]
-        c = d * t0[k] - rate_weights[k] * x_prev[k]
-        for i in range(nz):
-            tki = T[k, i]
-            if tki == 0.0:
-                continue
-            f[i] += tki * c
-            if d != 0.0:
-                dt = d * tki
-                for j in range(i, nz):
-                    H[i, j] += dt * T[k, j]
+    M: np.ndarray
+    h: np.ndarray
 
 
-@numba.njit(cache=True)
-def add_row_least_squares(A, offset, target, weight, H, f):
-    """``H += w A^T A``, ``f += w A^T (offset - target)``: the cost ``w/2 |A z + offset - target|^2``."""
-    nz = A.shape[1]
-    for r in range(A.shape[0]):
-        residual = offset[r] - target[r]
-        for i in range(nz):
-            wa = weight * A[r, i]
-            if wa != 0.0:
-                f[i] += wa * residual
-                for j in range(i, nz):
-                    H[i, j] += wa * A[r, j]
+class ContactRows(NamedTuple):
+    """The contacts and what the reduction needs to know about them."""
+
+    #: Contact Jacobians (3 c, nv), drifts and desired accelerations (3 c,) of all contacts.
+    jacobian: np.ndarray
+    drift: np.ndarray
+    desired: np.ndarray
+    #: The contacts with force variables (k,).
+    loaded: np.ndarray
+    #: The three acceleration columns of the joints that move each contact (c, 3).
+    leg_columns: np.ndarray
+    #: The acceleration columns that stay variables of ``z``, in ``z`` order.
+    free_columns: np.ndarray
+    #: The first force column of ``x``.
+    force_start: int
 
 
-@numba.njit(cache=True)
-def mirror_upper(H):
-    """Copy the upper triangle of ``H`` onto the lower one."""
-    n = H.shape[0]
-    for i in range(n):
-        for j in range(i + 1, n):
-            H[j, i] = H[i, j]
+class FullRows(NamedTuple):
+    """The full QP's constraints and how they map to the reduced QP's."""
+
+    A: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
+    #: The full QP's rows the reduced QP keeps (not eliminated).
+    kept_rows: np.ndarray
+    #: The variable of ``z`` of each column of ``x`` (-1: none).
+    z_of_x: np.ndarray
+    #: Columns of ``x`` whose bounds become rows of the reduced QP.
+    bounded: np.ndarray
+
+
+class Costs(NamedTuple):
+    """The regularisation and the torque-rate term."""
+
+    weights: np.ndarray
+    rate_weights: np.ndarray
+    x_prev: np.ndarray
+    tau_prev: np.ndarray
+    torque_rate: float
+    #: The first torque row among the reduced rows.
+    tau_first: int
+
+
+class ReducedRows(NamedTuple):
+    """What the reduction writes: the map, the reduced QP's arrays, the torque offsets."""
+
+    T: np.ndarray
+    t0: np.ndarray
+    H: np.ndarray
+    f: np.ndarray
+    A: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
+    offset: np.ndarray
+    rhs: np.ndarray
+    tau_offset: np.ndarray
+
+
+class Work(NamedTuple):
+    """Scratch: the legs' 3x3 blocks and inverses (k, 3, 3), the 6x6 base system, a row."""
+
+    L: np.ndarray
+    Linv: np.ndarray
+    K: np.ndarray
+    X: np.ndarray
+    g: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -286,40 +296,45 @@ def expand(T, t0, z, x):
 
 
 @numba.njit(cache=True)
-def reduced_problem(M, h, Jc, contact_drift, contact_desired, loaded, leg_columns,
-                    free_columns, force_start, A, lower, upper, lb, ub, kept_rows, z_of_x,
-                    bounded, J, drift, desired, row_weights, row_task, gains, active, weights,
-                    rate_weights, x_prev, tau_first, tau_prev, torque_rate, T, t0, H, f, A_r,
-                    lower_r, upper_r, lb_z, ub_z, offset, rhs, tau_offset, L, Linv, K, X, g):
+def reduced_problem(dynamics, contacts, full, tasks, costs, out, work):
     """The whole reduced QP of one tick in one call: the map ``x = T z + t0``, the kept rows
     and the bounds in ``z``, the task costs, the regularisation and the torque-rate term.
 
-    ``tau_first`` is the first torque-limit row among the reduced rows (-1: none); the
-    torques are then ``A_r[tau rows] z + tau_offset``. Returns False when the map is
-    singular (nothing else is written): solve the full QP instead.
+    Args:
+        dynamics, contacts, full, tasks, costs, out, work: :class:`Dynamics`,
+            :class:`ContactRows`, :class:`FullRows`, :class:`TaskRows`, :class:`Costs`,
+            :class:`ReducedRows` (written) and :class:`Work` (scratch).
+
+    The torques are ``out.A[tau rows] z + out.tau_offset`` (``costs.tau_first`` is their
+    first row among the reduced rows). Returns False when the map is singular (nothing
+    else is written): solve the full QP instead.
     """
+    h, rhs = dynamics.h, out.rhs
     for r in range(rhs.size):
-        rhs[r] = contact_desired[r] - contact_drift[r]
-    if not contact_consistent_map(M, h, Jc, rhs, loaded, leg_columns, free_columns,
-                                  force_start, T, t0, L, Linv, K, X):
+        rhs[r] = contacts.desired[r] - contacts.drift[r]
+    if not contact_consistent_map(dynamics.M, h, contacts.jacobian, rhs, contacts.loaded,
+                                  contacts.leg_columns, contacts.free_columns,
+                                  contacts.force_start, out.T, out.t0, work.L, work.Linv,
+                                  work.K, work.X):
         return False
-    kept = kept_rows.size
-    reduce_rows(A, lower, upper, kept_rows, T, t0, A_r[:kept], lower_r[:kept], upper_r[:kept],
-                offset[:kept])
-    reduce_bounds(lb, ub, z_of_x, bounded, T, t0, lb_z, ub_z, A_r[kept:], lower_r[kept:],
-                  upper_r[kept:])
+    T, t0, H, f, A_r, offset = out.T, out.t0, out.H, out.f, out.A, out.offset
+    kept = full.kept_rows.size
+    reduce_rows(full.A, full.lower, full.upper, full.kept_rows, T, t0, A_r[:kept],
+                out.lower[:kept], out.upper[:kept], offset[:kept])
+    reduce_bounds(full.lb, full.ub, full.z_of_x, full.bounded, T, t0, out.lb, out.ub,
+                  A_r[kept:], out.lower[kept:], out.upper[kept:])
     H[:, :] = 0.0
     f[:] = 0.0
-    accumulate_tasks(J, drift, desired, row_weights, row_task, gains, active, T, t0, H, f, g)
-    add_diagonal_cost(weights, rate_weights, x_prev, T, t0, H, f)
-    if tau_first >= 0:
-        nj = tau_offset.size
-        nv = h.size
-        for k in range(nj):
-            tau_offset[k] = offset[tau_first + k] + h[nv - nj + k]
-        if torque_rate > 0.0:
-            add_row_least_squares(A_r[tau_first:tau_first + nj], tau_offset, tau_prev,
-                                  torque_rate, H, f)
+    accumulate_tasks(tasks, T, t0, H, f, work.g)
+    add_diagonal_cost(costs.weights, costs.rate_weights, costs.x_prev, T, t0, H, f)
+    tau_first, tau_offset = costs.tau_first, out.tau_offset
+    nj = tau_offset.size
+    nv = h.size
+    for k in range(nj):
+        tau_offset[k] = offset[tau_first + k] + h[nv - nj + k]
+    if costs.torque_rate > 0.0:
+        add_row_least_squares(A_r[tau_first:tau_first + nj], tau_offset, costs.tau_prev,
+                              costs.torque_rate, H, f)
     mirror_upper(H)
     return True
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbc.controller.balance_controller import BalanceController
-from wbc.controller.contact_modes import LEG_REACH_M
+from wbc.controller.foot_reach import LEG_REACH_M
 from wbc.core.errors import ConfigurationError, ReachabilityError
 from wbc.core.min_jerk import min_jerk, min_jerk_reference
 from wbc.core.validation import as_float, check_name
@@ -19,15 +19,20 @@ from wbc.model.support_polygon import SupportPolygon
 MIN_HEIGHT_M, MAX_HEIGHT_M = 0.10, 0.50
 
 
-class LiftPhase(str, enum.Enum):
+def _foot(controller: BalanceController, leg: str) -> np.ndarray:
+    """A foot's world position [m] at the controller's last state (a copy)."""
+    return controller.foot_positions()[LEGS.index(leg)].copy()
+
+
+class LiftPhase(enum.StrEnum):
     """Phases of a leg lift, in order."""
 
     SHIFTING = "shifting"            # centre of mass into the other three feet's triangle
-    UNLOADING = "unloading"          # the foot's normal-force bound ramps to zero
+    UNLOADING = "unloading"          # the schedule ramps the foot's force bound to zero
     RAISING = "raising"              # the released foot rises to its target
     HOLDING = "holding"              # the foot holds its target
     LOWERING = "lowering"            # the foot returns to its ground point
-    RELOADING = "reloading"          # the foot's normal-force bound ramps back up
+    RELOADING = "reloading"          # the schedule ramps the foot's force bound back up
     SHIFTING_BACK = "shifting_back"  # centre of mass back to the four-leg stance
     DONE = "done"
 
@@ -68,10 +73,10 @@ class LegLift:
     Call :meth:`start` once, then :meth:`update` every control tick before
     ``controller.step``; :meth:`request_lower` interrupts the lift at any phase and brings
     the robot back to four loaded feet in bounded time. Positions are world-frame [m].
-
-    The foot target is ``forward_m`` in front of the leg's shoulder (see
-    :meth:`WholeBodyController.shoulder_position`) and
-    ``lateral_m`` outward, at ``height_m`` above the ground (the foot sphere's centre).
+    The foot is unloaded and reloaded by a ramp of its normal-force bound that the
+    controller's contact schedule moves on every tick (asked for once a phase). The foot
+    target is ``forward_m`` in front of the leg's shoulder and ``lateral_m`` outward, at
+    ``height_m`` above the ground (the foot sphere's centre).
     """
 
     def __init__(self, controller: BalanceController, *, leg: str = "FR",
@@ -123,11 +128,11 @@ class LegLift:
             ConfigurationError: The leg is not in stance.
         """
         ctrl = self.controller
-        if self.leg not in ctrl.stance_legs or len(ctrl.stance_legs) < 4:
+        stance = ctrl.schedule.stance_legs
+        if self.leg not in stance or len(stance) < len(LEGS):
             raise ConfigurationError(
-                f"leg: the lift needs all four feet in stance, stance now: {ctrl.stance_legs}"
-            )
-        feet = {leg: ctrl.foot_position(leg) for leg in LEGS}
+                f"leg: the lift needs all four feet in stance, stance now: {stance}")
+        feet = {leg: _foot(ctrl, leg) for leg in LEGS}
         others = np.array([feet[leg][:2] for leg in LEGS if leg != self.leg])
         com0 = ctrl.com_target
         shifted = SupportPolygon(margin_m=self.shift_margin_m).closest_inside(others, com0)
@@ -179,6 +184,7 @@ class LegLift:
         if self.phase is None:
             raise ConfigurationError("LegLift.update: call start(now_s) first")
         ctrl, t = self.controller, self.timing
+        schedule = ctrl.schedule
         elapsed = now_s - self._t0
         done = elapsed >= self._duration
         phase = self.phase
@@ -187,19 +193,18 @@ class LegLift:
             if done and phase is LiftPhase.SHIFTING:
                 # Ramp from the load the foot carries, not from its (much higher) bound:
                 # the bound only bites once it falls below the load.
-                self._load_n = max(ctrl.normal_force(self.leg), ctrl.min_normal_force_n)
-                self._fmax_from = min(self._load_n, ctrl.max_normal_force(self.leg))
+                self._load_n = max(ctrl.normal_force(self.leg), schedule.min_normal_force_n)
+                start = min(self._load_n, schedule.max_normal_force(self.leg))
+                schedule.ramp_normal_force(self.leg, 0.0, t.unload_s, from_n=start)
                 self._enter(LiftPhase.UNLOADING, now_s, duration=t.unload_s)
             elif done:
                 self._enter(LiftPhase.DONE, now_s, duration=0.0)
         elif phase is LiftPhase.UNLOADING:
-            s = min_jerk(elapsed / self._duration)[0]
-            ctrl.set_max_normal_force(self.leg, self._fmax_from * (1.0 - s))
-            if done:
-                ctrl.set_swing(self.leg)
+            if done:  # the schedule's ramp has brought the bound to zero
+                schedule.set_swing(self.leg)
                 # The foot rolled while the body shifted: start from where it is, and land
                 # there, so that shifting back rolls it home.
-                self._foot_ref = ctrl.foot_position(self.leg)
+                self._foot_ref = _foot(ctrl, self.leg)
                 self.foot_touch = self._foot_ref - np.array([0.0, 0.0, self.touchdown_press_m])
                 if self.release_only:
                     self._enter(LiftPhase.DONE, now_s, duration=0.0)
@@ -211,7 +216,8 @@ class LegLift:
             if done and phase is LiftPhase.RAISING:
                 self._enter(LiftPhase.HOLDING, now_s, duration=self.hold_s)
             elif done:
-                ctrl.set_stance(self.leg, max_normal_force_n=0.0)
+                schedule.set_stance(self.leg, max_normal_force_n=0.0)
+                schedule.ramp_normal_force(self.leg, self._reload_to_n(), self._reload_s())
                 self._enter(LiftPhase.RELOADING, now_s, duration=self._reload_s())
                 self._from, self._to = self._com_ref.copy(), self.com_home
                 self._shift_t0 = now_s
@@ -223,10 +229,10 @@ class LegLift:
             if done:
                 self._start_foot_motion(now_s, LiftPhase.LOWERING, self.foot_touch, t.lower_s)
         elif phase is LiftPhase.RELOADING:
-            # Ramp up to the load the foot carried before the lift; then release the bound.
-            s = min_jerk(elapsed / self._duration)[0]
-            ctrl.set_max_normal_force(self.leg, ctrl.full_normal_force_n if done
-                                      else s * self._reload_to_n())
+            # The schedule ramps up to the load the foot carried before the lift; at the
+            # end the bound is released.
+            if done:
+                schedule.set_max_normal_force(self.leg, schedule.full_normal_force_n)
             if self.interrupted:  # an unwind shifts back while it reloads
                 self._track_com(now_s - self._shift_t0, duration=t.unwind_shift_s)
             if done and self.interrupted:
@@ -279,12 +285,12 @@ class LegLift:
         to ``com_home`` [m].
         """
         lift = cls(controller, leg=leg, height_m=MIN_HEIGHT_M, hold_s=0.0)
-        if leg in controller.stance_legs:
+        if controller.schedule.is_stance(leg):
             raise ConfigurationError(f"leg: {leg} is already in stance; nothing to put down")
         lift.com_home = np.array(com_home, dtype=float)
         lift.foot_ground = np.array(ground_point, dtype=float)
         lift.foot_touch = lift.foot_ground - np.array([0.0, 0.0, lift.touchdown_press_m])
-        lift.foot_target = controller.foot_position(leg)
+        lift.foot_target = _foot(controller, leg)
         lift._foot_ref = lift.foot_target.copy()
         lift._com_ref = controller.com_target
         lift._enter(LiftPhase.HOLDING, now_s, duration=1.0)
@@ -312,11 +318,15 @@ class LegLift:
             self._from, self._to = self._com_ref.copy(), self.com_home
             self._enter(LiftPhase.SHIFTING_BACK, now_s, duration=t.unwind_shift_s)
         elif self.phase in (LiftPhase.UNLOADING, LiftPhase.RELOADING):
-            # Reload from the current bound at the unwind pace, shifting back meanwhile.
-            s0 = min(1.0, ctrl.max_normal_force(self.leg) / self._reload_to_n())
-            reload_s = self._reload_s()
-            self._enter(LiftPhase.RELOADING, now_s - self._inverse_ramp(s0) * reload_s,
-                        duration=reload_s)
+            # Reload from the current bound at the unwind pace, shifting back meanwhile: the
+            # reload's ramp taken up where it reaches the current bound.
+            schedule = ctrl.schedule
+            reload_to, reload_s = self._reload_to_n(), self._reload_s()
+            s0 = min(1.0, schedule.max_normal_force(self.leg) / reload_to)
+            already_s = self._inverse_ramp(s0) * reload_s
+            schedule.ramp_normal_force(self.leg, reload_to, reload_s, from_n=0.0,
+                                       elapsed_s=already_s)
+            self._enter(LiftPhase.RELOADING, now_s - already_s, duration=reload_s)
             self._from, self._to = self._com_ref.copy(), self.com_home
             self._shift_t0 = now_s
         elif self.phase in (LiftPhase.RAISING, LiftPhase.HOLDING, LiftPhase.LOWERING):
@@ -325,9 +335,9 @@ class LegLift:
 
     def _reload_to_n(self) -> float:
         """The bound the reload ramps to: the foot's load before the lift, with room to spare."""
-        ctrl = self.controller
-        load = getattr(self, "_load_n", 0.25 * ctrl.total_mass_kg * 9.81)
-        return min(ctrl.full_normal_force_n, 1.5 * load + 2.0 * ctrl.min_normal_force_n)
+        ctrl, schedule = self.controller, self.controller.schedule
+        load = getattr(self, "_load_n", ctrl.description.total_mass * 9.81 / len(LEGS))
+        return min(schedule.full_normal_force_n, 1.5 * load + 2.0 * schedule.min_normal_force_n)
 
     def _reload_s(self) -> float:
         t = self.timing

@@ -15,7 +15,7 @@ from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Descripti
 from wbc.motions.leg_lift import LegLift, LiftPhase
 
 
-class TransitionPhase(str, enum.Enum):
+class TransitionPhase(enum.StrEnum):
     """Phases of a posture transition."""
 
     PLACING_FOOT = "placing_foot"  # a foot left in the air is put down first
@@ -60,8 +60,7 @@ class PostureTransition:
             description: The robot files (the controller's by default).
         """
         self.controller = controller
-        self.description = (description or getattr(controller, "description", None)
-                            or Go2Description.default())
+        self.description = description or controller.description
         self.pose = check_name("pose", pose, self.description.poses)
         self.duration_s = as_float("duration_s", duration_s, low=0.2, high=30.0)
         self.phase: TransitionPhase | None = None
@@ -75,8 +74,7 @@ class PostureTransition:
         self.progress = 0.0
 
     def _com_goal(self) -> np.ndarray:
-        ctrl = self.controller
-        feet = np.array([ctrl.foot_position(leg) for leg in LEGS])
+        feet = np.array(self.controller.foot_positions())
         ground = feet[:, 2].min() - FOOT_RADIUS_M
         xy = feet[:, :2].mean(axis=0) + self.com_offset[:2]
         return np.array([xy[0], xy[1], ground + self.com_offset[2]])
@@ -84,7 +82,7 @@ class PostureTransition:
     def start(self, now_s: float) -> None:
         """Plan from the controller's last state and begin."""
         ctrl = self.controller
-        swing = [leg for leg in LEGS if leg not in ctrl.stance_legs]
+        swing = [leg for leg in LEGS if not ctrl.schedule.is_stance(leg)]
         if swing:
             leg = swing[0]
             ground = ctrl.shoulder_position(leg)[:2] + self.foot_under_shoulder[leg]

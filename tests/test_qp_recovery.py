@@ -1,0 +1,72 @@
+"""After a failed solve: a fresh workspace of the configured backend; DAQP names the culprit."""
+
+import numpy as np
+import pytest
+
+from wbc import WholeBodyController
+from wbc.backends import QpProblem, QpResult, available_backends, register_backend
+from wbc.backends.backend import unregister_backend
+from wbc.backends.daqp_backend import DaqpBackend
+from wbc.controller.control_output import ControlStatus
+
+pytestmark = pytest.mark.skipif("osqp" not in available_backends(),
+                                reason="OSQP is not installed here")
+
+
+def _failing_osqp():
+    from wbc.backends.osqp_backend import OsqpBackend
+
+    class FailingOsqp(OsqpBackend):
+        """OSQP that reports a failure for the next ``fail_ticks`` solves."""
+
+        name = "failing_osqp"
+
+        def __init__(self) -> None:
+            super().__init__()
+            self.fail_ticks = 0
+
+        def solve(self, problem: QpProblem) -> QpResult:
+            if self.fail_ticks > 0:
+                self.fail_ticks -= 1
+                return QpResult(found=False, x=np.full(problem.n, np.nan), solve_time_s=0.0,
+                                status="injected", reason="injected failure")
+            return super().solve(problem)
+    return FailingOsqp
+
+
+@pytest.fixture
+def failing_osqp():
+    register_backend("failing_osqp", _failing_osqp())
+    yield "failing_osqp"
+    unregister_backend("failing_osqp")
+
+
+def test_a_solver_failure_is_solved_again_by_a_fresh_workspace_of_the_same_backend(
+        failing_osqp, description, monkeypatch):
+    controller = WholeBodyController(backend=failing_osqp)
+    q = description.pose("standing")
+    controller.reset(q)
+    assert controller.step(q, np.zeros(18)).ok
+    daqp_solves = []
+    solve = DaqpBackend.solve
+    monkeypatch.setattr(DaqpBackend, "solve",
+                        lambda self, problem: daqp_solves.append(1) or solve(self, problem))
+    controller.backend.fail_ticks = 1
+    out = controller.step(q, np.zeros(18))
+    assert out.status is ControlStatus.RESOLVED
+    assert out.message == ("QP failed: injected failure; the problem is feasible: commanded "
+                           "a fresh OSQP solution")
+    assert daqp_solves == []            # no DAQP in between: the configured solver's answer
+    assert controller.failures == 1
+    assert controller.step(q, np.zeros(18)).ok
+
+
+def test_an_infeasible_qp_is_still_named_by_daqp_whatever_the_backend(description):
+    controller = WholeBodyController(backend="osqp", torque_limit_fraction=0.01)
+    q = description.pose("standing")
+    controller.reset(q)
+    out = controller.step(q, np.zeros(18))
+    assert out.status is ControlStatus.RELAXED and out.infeasible_group == "torque limits"
+    assert out.message.endswith("; infeasible constraint group: torque limits; commanded the "
+                                "solution with that group relaxed")
+    assert np.all(np.abs(out.tau) <= controller.tau_max + 1e-9)

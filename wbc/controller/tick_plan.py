@@ -1,0 +1,194 @@
+"""One variable layout's tick, planned once: its QP, the constraints' blocks, the task costs'
+columns, the reduction, and every compiled call bound to them."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from tasks.constraint import Constraint, ConstraintBlock
+from tasks.contact_task import ContactTask
+from tasks.variable_layout import VariableLayout
+from wbc.backends.qp_problem import QpProblem
+from wbc.controller import cost_kernels, qp_kernel
+from wbc.controller.task_stack import TaskStack
+from wbc.core.compiled_call import bind_compiled
+from wbc.model.kinematics import RobotKinematics
+
+
+@dataclass
+class Regularization:
+    """Small costs that make the QP strictly convex and the solution smooth in time.
+
+    Attributes:
+        acceleration: Weight of ``|qdd|^2``. force: of ``|f|^2``.
+        acceleration_rate, force_rate: Weights of the change from the previous solution.
+        torque_rate: Weight of ``|tau - tau_prev|^2`` (the torques the previous tick sent).
+        slack: Weight of each slack variable, by name (0 when not listed).
+    """
+
+    acceleration: float = 1e-4
+    force: float = 1e-5
+    acceleration_rate: float = 0.0
+    force_rate: float = 0.0
+    torque_rate: float = 0.0
+    slack: dict[str, float] | None = None
+
+
+class Reduction:
+    """The reduced QP of a layout and its map ``x = T z + t0`` (:mod:`qp_kernel`), with the
+    reduction kernel bound to every array it reads and writes."""
+
+    def __init__(self, plan: TickPlan, constraints: Sequence[Constraint],
+                 eliminated: Sequence[bool], leg_columns: np.ndarray,
+                 kinematics: RobotKinematics, contact_task: ContactTask,
+                 regularization: Regularization, tau_prev: np.ndarray, tau_index: int):
+        layout, nv, full = plan.layout, plan.layout.nv, plan.full
+        stance_columns = {int(c) for i in layout.loaded for c in leg_columns[i]}
+        self.free_columns = np.array([c for c in range(6, nv) if c not in stance_columns],
+                                     dtype=np.int64)
+        nz = self.free_columns.size + layout.n - layout.force_start
+        self.T = np.zeros((layout.n, nz))
+        self.t0 = np.zeros(layout.n)
+        z_of_x = np.full(layout.n, -1, dtype=np.int64)
+        z_of_x[self.free_columns] = np.arange(self.free_columns.size)
+        z_of_x[layout.force_start:] = np.arange(self.free_columns.size, nz)
+        #: Stance joints' accelerations: their bounds become rows of the reduced QP.
+        bounded = np.array(sorted(stance_columns), dtype=np.int64)
+        kept = [r for block, gone in zip(plan.blocks, eliminated) if not gone
+                for r in range(block.rows.start, block.rows.stop)]
+        kept_rows = np.array(kept, dtype=np.int64)
+        self.problem = p = QpProblem(nz, kept_rows.size + bounded.size)
+        p.is_equality[:kept_rows.size] = full.is_equality[kept_rows]
+        p.row_groups[:kept_rows.size] = [full.row_groups[r] for r in kept]
+        p.row_groups[kept_rows.size:] = ["joint limits"] * bounded.size
+        #: The first torque row among the reduced rows.
+        self.tau_first = int(np.searchsorted(kept_rows, plan.blocks[tau_index].rows.start))
+        self.tau_offset = np.zeros(nv - 6)
+        k = len(layout.loaded)
+        call = bind_compiled(
+            qp_kernel.reduced_problem,
+            qp_kernel.Dynamics(kinematics.mass_matrix, kinematics.nonlinear_effects),
+            qp_kernel.ContactRows(contact_task.jacobian, contact_task.drift,
+                                  contact_task.desired_acceleration, layout.loaded,
+                                  leg_columns, self.free_columns, layout.force_start),
+            qp_kernel.FullRows(full.A, full.lower, full.upper, full.lb, full.ub, kept_rows,
+                               z_of_x, bounded),
+            plan.task_rows,
+            qp_kernel.Costs(plan.weights, plan.rate_weights, plan.x_prev, tau_prev,
+                            float(regularization.torque_rate), self.tau_first),
+            qp_kernel.ReducedRows(self.T, self.t0, p.H, p.f, p.A, p.lower, p.upper, p.lb, p.ub,
+                                  np.zeros(p.m), np.zeros(contact_task.dim), self.tau_offset),
+            qp_kernel.Work(np.zeros((k, 3, 3)), np.zeros((k, 3, 3)), np.zeros((6, 6)),
+                           np.zeros((6, nz + 1)), np.zeros(nz)))
+        #: Writes this tick's reduced QP; False when a leg is singular (solve the full QP).
+        self.call: Callable[[], bool] = call
+
+
+
+class TickPlan:
+    """Everything one variable layout needs every tick, allocated and bound once.
+
+    The full QP over ``x`` with each constraint's :class:`tasks.ConstraintBlock` in it;
+    the constraints' tick calls (:meth:`tasks.Constraint.tick_call`); the columns of ``x``
+    each task's Jacobian spans here; the regularisation; the previous solution; and, when
+    the registered constraints allow it, the :class:`Reduction`. A problem builder keeps
+    one plan per layout and drops them all when what is registered changes.
+    """
+
+    def __init__(self, layout: VariableLayout, constraints: Sequence[Constraint],
+                 stack: TaskStack, regularization: Regularization, *,
+                 kinematics: RobotKinematics, contact_task: ContactTask,
+                 tau_prev: np.ndarray, eliminated: Sequence[bool] | None,
+                 leg_columns: np.ndarray | None):
+        """Args:
+            layout: The variables.
+            constraints: The registered constraints (one of them ``gives_torques``).
+            stack: The registered tasks' rows.
+            regularization: The small costs.
+            kinematics, contact_task: What the reduction reads.
+            tau_prev: The torques the torque-rate term pulls towards (read in place).
+            eliminated: Which constraints the reduction eliminates; ``None``: no reduction.
+            leg_columns: The three acceleration columns moving each contact (reduction).
+        """
+        self.layout = layout
+        self.constraints = tuple(constraints)
+        n = layout.n
+        counts = [c.rows(layout) for c in constraints]
+        self.full = full = QpProblem(n, int(sum(counts)))
+        self.blocks: list[ConstraintBlock] = []
+        start = 0
+        for constraint, count in zip(constraints, counts):
+            rows = slice(start, start + count)
+            self.blocks.append(ConstraintBlock(A=full.A[rows], lower=full.lower[rows],
+                                               upper=full.upper[rows], lb=full.lb, ub=full.ub,
+                                               rows=rows))
+            full.is_equality[rows] = constraint.equality
+            full.row_groups[rows] = [constraint.name] * count
+            start += count
+        self.tau_index = next(i for i, c in enumerate(constraints) if c.gives_torques)
+        self.tau_block = self.blocks[self.tau_index]
+        self.identity, self.zero = np.eye(n), np.zeros(n)
+        self.x, self.x_prev = np.zeros(n), np.zeros(n)
+        nv, nf = layout.nv, 3 * len(layout.force_contacts)
+        reg = regularization
+        self.weights, self.rate_weights = np.zeros(n), np.zeros(n)
+        self.weights[:nv] = reg.acceleration + reg.acceleration_rate
+        self.rate_weights[:nv] = reg.acceleration_rate
+        self.weights[nv:nv + nf] = reg.force + reg.force_rate
+        self.rate_weights[nv:nv + nf] = reg.force_rate
+        for name in layout.slacks:
+            self.weights[layout.slack_column(name)] = (reg.slack or {}).get(name, 0.0)
+        self.g = np.zeros(n)
+        #: The stacked task rows with this layout's columns, as the cost kernels take them.
+        self.task_rows = stack.rows(stack.columns(layout))
+        self.reduction: Reduction | None = None
+        if eliminated is not None and leg_columns is not None:
+            self.reduction = Reduction(self, constraints, eliminated, leg_columns, kinematics,
+                                       contact_task, regularization, tau_prev, self.tau_index)
+        #: The full QP's cost terms, bound to its arrays: the tasks, the regularisation, the
+        #: torque-rate term, then the lower triangle (after ``H`` and ``f`` are zeroed).
+        full_cost = [
+            bind_compiled(cost_kernels.accumulate_tasks, self.task_rows, self.identity,
+                          self.zero, full.H, full.f, self.g),
+            bind_compiled(cost_kernels.add_diagonal_cost, self.weights, self.rate_weights,
+                          self.x_prev, self.identity, self.zero, full.H, full.f)]
+        if regularization.torque_rate > 0.0:
+            full_cost.append(bind_compiled(
+                cost_kernels.add_row_least_squares, self.tau_block.A,
+                kinematics.nonlinear_effects[6:], tau_prev, float(regularization.torque_rate),
+                full.H, full.f))
+        full_cost.append(bind_compiled(cost_kernels.mirror_upper, full.H))
+        self.full_cost: list[Callable[[], None]] = full_cost
+        gone = eliminated if self.reduction is not None else [False] * len(constraints)
+        self.setup()
+        calls = [(c.tick_call(kinematics, layout, b), g)
+                 for c, b, g in zip(constraints, self.blocks, gone)]
+        #: The constraints' tick calls, without those the reduction eliminates.
+        self.calls: list[Callable[[], None]] = [call for call, g in calls if not g]
+        #: The eliminated constraints' tick calls: run for the full QP only.
+        self.eliminated_calls: list[Callable[[], None]] = [call for call, g in calls if g]
+
+    @property
+    def reduced(self) -> QpProblem | None:
+        """The reduced QP (``None`` when this layout has no reduction)."""
+        return None if self.reduction is None else self.reduction.problem
+
+    def setup(self) -> None:
+        """The constraints' constant entries (:meth:`tasks.Constraint.setup`)."""
+        for constraint, block in zip(self.constraints, self.blocks):
+            constraint.setup(self.layout, block)
+
+    def carry_over(self, previous: TickPlan) -> None:
+        """Start from the previous layout's solution: accelerations, and the forces of the
+        contacts loaded in both."""
+        nv = self.layout.nv
+        self.x_prev[:] = 0.0
+        self.x_prev[:nv] = previous.x_prev[:nv]
+        self.x[:] = 0.0
+        for contact in self.layout.force_contacts:
+            old, new = previous.layout.force_slice(contact), self.layout.force_slice(contact)
+            if old is not None and new is not None:
+                self.x_prev[new] = previous.x_prev[old]
