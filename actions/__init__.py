@@ -1,6 +1,6 @@
 """Actions with ROS 2 semantics, without ROS: goals, feedback, cancellation, results."""
 
-from actions.action_client import ActionClient
+from actions.action_client import ActionClient, ActionTimeoutError, RunnerStalledError
 from actions.action_definition import (
     ActionDefinition,
     ConstantSpec,
@@ -10,26 +10,33 @@ from actions.action_definition import (
     parse_action_text,
     parse_message_text,
 )
-from actions.action_runner import ActionRunner, BusyPolicy, Event
+from actions.action_runner import ActionRunner
 from actions.action_server import ActionServer
-from actions.action_type import (
+from actions.action_type import ActionType, action_type_named
+from actions.behaviour import Behaviour, StepResult
+from actions.busy_policy import BusyPolicy
+from actions.client_goal_handle import ClientGoalHandle, GoalRejectedError
+from actions.errors import (
+    ActionUsageError,
+    IllegalTransitionError,
+    InterfaceMismatchError,
+    UnknownFieldError,
+)
+from actions.event_log import Event
+from actions.go2.go2_interfaces import (
     ACTION_TYPES,
-    FOLLOW_JOINT_TRAJECTORY,
     HIGH_FIVE,
     SIT,
     STAND,
-    ActionType,
-    action_type_named,
-)
-from actions.behaviour import Behaviour, StepResult
-from actions.client_goal_handle import ClientGoalHandle
-from actions.errors import (
-    ActionTimeoutError,
-    ActionUsageError,
-    GoalRejectedError,
-    IllegalTransitionError,
-    RunnerStalledError,
-    UnknownFieldError,
+    HighFiveFeedback,
+    HighFiveGoal,
+    HighFiveResult,
+    SitFeedback,
+    SitGoal,
+    SitResult,
+    StandFeedback,
+    StandGoal,
+    StandResult,
 )
 from actions.goal_status import (
     LEGAL_TRANSITIONS,
@@ -39,34 +46,7 @@ from actions.goal_status import (
     legal_next_statuses,
 )
 from actions.message_fields import set_message_fields
-from actions.messages import (
-    Duration,
-    FollowJointTrajectoryFeedback,
-    FollowJointTrajectoryGoal,
-    FollowJointTrajectoryResult,
-    Header,
-    HighFiveFeedback,
-    HighFiveGoal,
-    HighFiveResult,
-    JointComponentTolerance,
-    JointTolerance,
-    JointTrajectory,
-    JointTrajectoryPoint,
-    MultiDOFJointTrajectory,
-    MultiDOFJointTrajectoryPoint,
-    Quaternion,
-    SitFeedback,
-    SitGoal,
-    SitResult,
-    StandFeedback,
-    StandGoal,
-    StandResult,
-    Time,
-    Transform,
-    Twist,
-    Vector3,
-    as_duration,
-)
+from actions.messages import Duration, Time, as_duration
 from actions.responses import (
     CancelResponse,
     CancelReturnCode,
@@ -75,6 +55,22 @@ from actions.responses import (
     Rejection,
     RejectionCode,
     WrappedResult,
+)
+from actions.ros_interfaces.control_msgs import (
+    FOLLOW_JOINT_TRAJECTORY,
+    FollowJointTrajectoryFeedback,
+    FollowJointTrajectoryGoal,
+    FollowJointTrajectoryResult,
+    JointComponentTolerance,
+    JointTolerance,
+)
+from actions.ros_interfaces.geometry_msgs import Quaternion, Transform, Twist, Vector3
+from actions.ros_interfaces.std_msgs import Header
+from actions.ros_interfaces.trajectory_msgs import (
+    JointTrajectory,
+    JointTrajectoryPoint,
+    MultiDOFJointTrajectory,
+    MultiDOFJointTrajectoryPoint,
 )
 
 __all__ = [
@@ -113,6 +109,7 @@ __all__ = [
     "HighFiveGoal",
     "HighFiveResult",
     "IllegalTransitionError",
+    "InterfaceMismatchError",
     "JointComponentTolerance",
     "JointTolerance",
     "JointTrajectory",

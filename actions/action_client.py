@@ -15,20 +15,40 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from actions.action_runner import ActionRunner
 from actions.action_type import ActionType
-from actions.errors import (
-    ActionTimeoutError,
-    ActionUsageError,
-    GoalRejectedError,
-    RunnerStalledError,
-)
-from wbc.core.errors import ConfigurationError
+from actions.client_goal_handle import ClientGoalHandle, GoalRejectedError
+from actions.errors import ActionUsageError
+from wbc.core.errors import ConfigurationError, WbcError
 from wbc.core.validation import is_finite_real
 
 if TYPE_CHECKING:
-    from actions.client_goal_handle import ClientGoalHandle
     from actions.responses import CancelResponse, FeedbackMessage, WrappedResult
 
 T = TypeVar("T")
+
+
+class ActionTimeoutError(WbcError, TimeoutError):
+    """A blocking action call did not finish in time. The goal is NOT cancelled.
+
+    Attributes:
+        goal_handle: The handle of the accepted goal, or ``None`` when the goal request itself
+            had not been processed yet (then use :attr:`goal_handle_future`).
+        goal_handle_future: Resolves to the goal's handle once a tick processes the request.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        goal_handle: ClientGoalHandle | None = None,
+        goal_handle_future: Future[ClientGoalHandle] | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.goal_handle = goal_handle
+        self.goal_handle_future = goal_handle_future
+
+
+class RunnerStalledError(ActionTimeoutError):
+    """Nothing ticks the runner: no thread calls ``tick`` and no spin hook can drive it."""
 
 
 class ActionClient:

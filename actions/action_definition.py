@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
@@ -33,6 +33,7 @@ class FieldSpec:
         is_array: Whether the field is an array (``T[]``, ``T[N]`` or ``T[<=N]``).
         array_size: ``N`` for ``T[N]`` / ``T[<=N]``, ``None`` for unbounded ``T[]`` or scalars.
         default: The default value as written after the name, or ``None``.
+        line: The line of the file it is on, for error messages (not compared).
     """
 
     type_name: str
@@ -40,6 +41,7 @@ class FieldSpec:
     is_array: bool = False
     array_size: int | None = None
     default: str | None = None
+    line: int | None = field(default=None, compare=False, repr=False)
 
     @property
     def base_type(self) -> str:
@@ -49,11 +51,13 @@ class FieldSpec:
 
 @dataclass(frozen=True)
 class ConstantSpec:
-    """One constant (``int32 SUCCESSFUL = 0``), its value parsed to ``int``/``float``/``bool``/``str``."""
+    """One constant (``int32 SUCCESSFUL = 0``), its value parsed to ``int``, ``float``, ``bool``
+    or ``str``."""
 
     type_name: str
     name: str
     value: int | float | bool | str
+    line: int | None = field(default=None, compare=False, repr=False)
 
 
 class MessageDefinition(NamedTuple):
@@ -128,7 +132,7 @@ def _parse_lines(lines: list[tuple[int, str]], source: str) -> MessageDefinition
         if "=" in rest:
             # Comments are part of a string constant's value, as in rosidl.
             value_text = raw.split("=", 1)[1].strip() if match["base"] in _STRING_TYPES else None
-            constants.append(_parse_constant(match["base"], rest, value_text, where))
+            constants.append(_parse_constant(match["base"], rest, value_text, where, number))
             continue
         name, _, default = rest.strip().partition(" ")
         if not _NAME.match(name):
@@ -142,37 +146,57 @@ def _parse_lines(lines: list[tuple[int, str]], source: str) -> MessageDefinition
                 is_array=match["array"] is not None,
                 array_size=int(match["size"]) if match["size"] else None,
                 default=default.strip() or None,
+                line=number,
             )
         )
     return MessageDefinition(tuple(fields), tuple(constants))
 
 
 def _parse_constant(
-    type_name: str, rest: str, string_value: str | None, where: str
+    type_name: str, rest: str, string_value: str | None, where: str, line: int
 ) -> ConstantSpec:
     name, _, value_text = (part.strip() for part in rest.partition("="))
     if not _NAME.match(name):
         raise ConfigurationError(f"{where}: invalid constant name {name!r}")
-    value: int | float | bool | str
+    if not is_scalar_type(type_name):
+        raise ConfigurationError(
+            f"{where}: constant {name} has type {type_name!r}; constants must be a "
+            "number, bool or string"
+        )
     try:
-        if type_name in _INTEGER_TYPES:
-            value = int(value_text, 0)
-        elif type_name in _FLOAT_TYPES:
-            value = float(value_text)
-        elif type_name == "bool":
-            value = _parse_bool(value_text)
-        elif type_name in _STRING_TYPES:
-            value = _unquote(string_value if string_value is not None else value_text)
-        else:
-            raise ConfigurationError(
-                f"{where}: constant {name} has type {type_name!r}; constants must be a "
-                "number, bool or string"
-            )
+        value = parse_scalar(
+            type_name, string_value if type_name in _STRING_TYPES and string_value is not None
+            else value_text)
     except ValueError as err:
         raise ConfigurationError(
             f"{where}: constant {name} = {value_text!r} is not a valid {type_name}"
         ) from err
-    return ConstantSpec(type_name=type_name, name=name, value=value)
+    return ConstantSpec(type_name=type_name, name=name, value=value, line=line)
+
+
+def is_scalar_type(type_name: str) -> bool:
+    """Whether ``type_name`` is a number, ``bool`` or string type (what a constant or a
+    default value may have)."""
+    return (type_name in _INTEGER_TYPES or type_name in _FLOAT_TYPES or type_name == "bool"
+            or type_name in _STRING_TYPES)
+
+
+def parse_scalar(type_name: str, text: str) -> int | float | bool | str:
+    """A constant's or a default's value as written (``"-1"``, ``"2.0"``, ``"true"``,
+    ``'"hi"'``), as the Python value of its type.
+
+    Raises:
+        ValueError: ``text`` is not a value of ``type_name``, or the type is not a scalar.
+    """
+    if type_name in _INTEGER_TYPES:
+        return int(text, 0)
+    if type_name in _FLOAT_TYPES:
+        return float(text)
+    if type_name == "bool":
+        return _parse_bool(text)
+    if type_name in _STRING_TYPES:
+        return _unquote(text)
+    raise ValueError(f"{type_name} is not a number, bool or string type")
 
 
 def _parse_bool(text: str) -> bool:

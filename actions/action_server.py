@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from actions.action_type import ActionType
 from actions.behaviour import Behaviour
@@ -18,13 +18,18 @@ from actions.responses import GoalResponse, Rejection, RejectionCode
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import is_finite_real
 
-if TYPE_CHECKING:
-    from actions.action_runner import ActionRunner
-
 logger = logging.getLogger(__name__)
 
 #: A goal or cancel callback's answer.
 Decision = GoalResponse | Rejection
+
+
+class ServerRegistry(Protocol):
+    """What a server registers with: the runner of its robot (ROS 2: the node)."""
+
+    def add_server(self, server: ActionServer) -> None:
+        """Register ``server``; raise if its name is taken."""
+        ...
 
 
 class ActionServer:
@@ -53,7 +58,7 @@ class ActionServer:
 
     def __init__(
         self,
-        runner: ActionRunner,
+        runner: ServerRegistry,
         action_type: ActionType,
         action_name: str,
         behaviour_factory: Callable[[], Behaviour[Any, Any, Any]],

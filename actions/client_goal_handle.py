@@ -4,15 +4,41 @@ from __future__ import annotations
 
 import copy
 from concurrent.futures import Future
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
-from actions.errors import GoalRejectedError
 from actions.goal_status import GoalStatus
+from wbc.core.errors import WbcError
 
 if TYPE_CHECKING:
-    from actions.action_runner import ActionRunner
     from actions.goal_record import GoalRecord
     from actions.responses import CancelResponse, Rejection, WrappedResult
+
+
+class GoalRejectedError(WbcError):
+    """A goal was rejected, so it has no result.
+
+    Attributes:
+        goal_id: The rejected goal.
+        action_name: The action it was sent to.
+        rejection: Why the server refused it (code and message).
+    """
+
+    def __init__(self, goal_id: str, action_name: str, rejection: Rejection) -> None:
+        super().__init__(
+            f"goal {goal_id} ({action_name}) was rejected (code {rejection.code}): "
+            f"{rejection.message}"
+        )
+        self.goal_id = goal_id
+        self.action_name = action_name
+        self.rejection = rejection
+
+
+class CancelSubmitter(Protocol):
+    """What a handle sends its cancel requests to: the goal's runner."""
+
+    def submit_cancel(self, record: GoalRecord) -> Future[CancelResponse]:
+        """Queue a cancel request for ``record``'s goal; the future holds the reply."""
+        ...
 
 
 class ClientGoalHandle:
@@ -23,7 +49,7 @@ class ClientGoalHandle:
     stays available for as long as the handle is held, however many goals follow.
     """
 
-    def __init__(self, runner: ActionRunner, record: GoalRecord) -> None:
+    def __init__(self, runner: CancelSubmitter, record: GoalRecord) -> None:
         self._runner = runner
         self._record = record
 

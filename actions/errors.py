@@ -1,16 +1,15 @@
-"""Errors raised by the action machinery, all in the library's :class:`~wbc.core.errors.WbcError` family."""
+"""The action framework's ground errors, in the library's :class:`~wbc.core.errors.WbcError` family.
+
+This module imports nothing else of the framework, so every module may raise these. The errors
+that carry a goal handle or a rejection live with the class that raises them, above the types
+they hold: :class:`~actions.client_goal_handle.GoalRejectedError` (in
+``actions.client_goal_handle``), :class:`~actions.action_client.ActionTimeoutError` and
+:class:`~actions.action_client.RunnerStalledError` (in ``actions.action_client``).
+"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
 from wbc.core.errors import ConfigurationError, WbcError
-
-if TYPE_CHECKING:
-    from concurrent.futures import Future
-
-    from actions.client_goal_handle import ClientGoalHandle
-    from actions.responses import Rejection
 
 
 class UnknownFieldError(ConfigurationError, AttributeError):
@@ -20,53 +19,17 @@ class UnknownFieldError(ConfigurationError, AttributeError):
     """
 
 
+class InterfaceMismatchError(ConfigurationError):
+    """A message class declared in Python does not match the ``.action`` file that defines it.
+
+    Raised at import by :meth:`~actions.action_type.ActionType.from_file`; the message names
+    the class, the field (or constant), what the file says and what the class declares.
+    """
+
+
 class IllegalTransitionError(WbcError):
     """A goal status change that the action state machine does not allow."""
 
 
 class ActionUsageError(WbcError, RuntimeError):
-    """An action API was called where it cannot work, e.g. a blocking wait inside a tick callback."""
-
-
-class GoalRejectedError(WbcError):
-    """A goal was rejected, so it has no result.
-
-    Attributes:
-        goal_id: The rejected goal.
-        action_name: The action it was sent to.
-        rejection: Why the server refused it (code and message).
-    """
-
-    def __init__(self, goal_id: str, action_name: str, rejection: Rejection) -> None:
-        super().__init__(
-            f"goal {goal_id} ({action_name}) was rejected (code {rejection.code}): "
-            f"{rejection.message}"
-        )
-        self.goal_id = goal_id
-        self.action_name = action_name
-        self.rejection = rejection
-
-
-class ActionTimeoutError(WbcError, TimeoutError):
-    """A blocking action call did not finish in time. The goal is NOT cancelled.
-
-    Attributes:
-        goal_handle: The handle of the accepted goal, or ``None`` when the goal request itself
-            had not been processed yet (then use :attr:`goal_handle_future`).
-        goal_handle_future: Resolves to the goal's handle once a tick processes the request.
-    """
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        goal_handle: ClientGoalHandle | None = None,
-        goal_handle_future: Future[Any] | None = None,
-    ) -> None:
-        super().__init__(message)
-        self.goal_handle = goal_handle
-        self.goal_handle_future = goal_handle_future
-
-
-class RunnerStalledError(ActionTimeoutError):
-    """Nothing ticks the runner: no thread calls ``tick`` and no spin hook can drive it."""
+    """An action API was called where it cannot work, e.g. a blocking wait in a tick callback."""

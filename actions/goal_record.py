@@ -12,7 +12,6 @@ from actions.goal_status import GoalStatus
 if TYPE_CHECKING:
     from actions.action_server import ActionServer
     from actions.behaviour import Behaviour
-    from actions.client_goal_handle import ClientGoalHandle
     from actions.responses import FeedbackMessage, Rejection, WrappedResult
 
 
@@ -31,8 +30,6 @@ class GoalRecord:
         cancel_reason: Why the goal is canceling, or ``None``.
         cancel_requested_s: Simulated time [s] the cancel was acknowledged.
         preempted_by: ``"preempted by goal <id> (<action>)"`` if a preemption cancelled it.
-        handle: The client's handle, made at submission.
-        handle_future: Resolves to ``handle`` when the goal is accepted or rejected.
         result_future: Resolves to the :class:`WrappedResult` when the goal ends.
     """
 
@@ -46,8 +43,6 @@ class GoalRecord:
     cancel_reason: str | None = None
     cancel_requested_s: float | None = None
     preempted_by: str | None = None
-    handle: ClientGoalHandle | None = None
-    handle_future: Future[ClientGoalHandle] = field(default_factory=Future)
     result_future: Future[WrappedResult] = field(default_factory=Future)
 
     @property

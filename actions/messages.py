@@ -1,10 +1,12 @@
-"""Message types of the shipped actions: dataclasses whose fields mirror the .action files.
+"""Messages: the base class that checks their fields, and ``builtin_interfaces``' Duration and Time.
 
-The ROS 2 analogues are the generated Python classes of ``builtin_interfaces``,
-``std_msgs``, ``geometry_msgs``, ``trajectory_msgs`` and ``control_msgs`` (e.g.
-``FollowJointTrajectory.Goal``). Like those, every message can be built with no arguments
-(numbers 0, strings and arrays empty) and then filled field by field, nested messages
-included::
+A message type is a ``@dataclass(slots=True)`` subclass of :class:`Message`, declared from its
+``.action`` file (:meth:`actions.action_type.ActionType.from_file` checks the declaration
+against the file, or builds the class from it). The ROS 2 analogues are the generated Python
+classes of ``builtin_interfaces``, ``std_msgs``, ``trajectory_msgs`` and ``control_msgs``
+(e.g. ``FollowJointTrajectory.Goal``). Like those, every message can be built with no
+arguments (numbers 0, strings and arrays empty, nested messages built empty) and then filled
+field by field, nested messages included::
 
     goal = FollowJointTrajectoryGoal()
     goal.trajectory.joint_names = ["FR_calf_joint"]
@@ -38,8 +40,8 @@ import dataclasses
 import functools
 import numbers
 import typing
-from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -108,6 +110,21 @@ class Message:
         Args:
             where: How to name this message in an error (its path from the message checked).
         """
+
+    @classmethod
+    def coerce(cls, value: Any, where: str) -> typing.Self:
+        """``value`` as a message of this type, for a field of this type that is given
+        something else than an instance (an instance is normalised instead).
+
+        Nothing is converted by default; :class:`Duration` and :class:`Time` also take a
+        number of seconds or an rclpy-style duration or time.
+
+        Raises:
+            ConfigurationError: ``value`` is not a ``cls``; the message names the field.
+        """
+        if isinstance(value, cls):
+            return value
+        raise ConfigurationError(f"{where} must be a {cls.__name__}; received {_describe(value)}")
 
 
 @functools.cache
@@ -180,9 +197,9 @@ def _coerce(hint: Any, value: Any, where: str, *, copy: bool) -> Any:
         if isinstance(value, str):
             return value
         raise ConfigurationError(f"{where} must be a str; received {_describe(value)}")
-    if isinstance(hint, type) and issubclass(hint, Message) and isinstance(value, hint):
-        return value._normalised(where, copy=copy)
-    if isinstance(hint, type) and issubclass(hint, _SecondsNanoseconds):
+    if isinstance(hint, type) and issubclass(hint, Message):
+        if isinstance(value, hint):
+            return value._normalised(where, copy=copy)
         return hint.coerce(value, where)
     if isinstance(hint, type) and isinstance(value, hint):
         return value
@@ -292,284 +309,3 @@ def as_duration(value: Duration | float, name: str = "duration") -> Duration:
         ConfigurationError: ``value`` is neither a ``Duration`` nor a finite number.
     """
     return Duration.coerce(value, name)
-
-
-# --- std_msgs, geometry_msgs ---------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class Header(Message):
-    """``std_msgs/Header``: when (``stamp``, simulated time) and in which frame data was given."""
-
-    stamp: Time = field(default_factory=Time)
-    frame_id: str = ""
-
-
-@dataclass(slots=True)
-class Vector3(Message):
-    """``geometry_msgs/Vector3``."""
-
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
-
-
-@dataclass(slots=True)
-class Quaternion(Message):
-    """``geometry_msgs/Quaternion``, ``(x, y, z, w)``; the default is the identity."""
-
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
-    w: float = 1.0
-
-
-@dataclass(slots=True)
-class Transform(Message):
-    """``geometry_msgs/Transform``: translation [m] and rotation."""
-
-    translation: Vector3 = field(default_factory=Vector3)
-    rotation: Quaternion = field(default_factory=Quaternion)
-
-
-@dataclass(slots=True)
-class Twist(Message):
-    """``geometry_msgs/Twist``: linear [m/s] and angular [rad/s] velocity."""
-
-    linear: Vector3 = field(default_factory=Vector3)
-    angular: Vector3 = field(default_factory=Vector3)
-
-
-# --- trajectory_msgs -----------------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class JointTrajectoryPoint(Message):
-    """``trajectory_msgs/JointTrajectoryPoint``: one waypoint, values in ``joint_names`` order.
-
-    Attributes:
-        positions: Joint positions [rad].
-        velocities: Joint velocities [rad/s]; empty if unspecified.
-        accelerations: Joint accelerations [rad/s^2]; empty if unspecified.
-        effort: Joint torques [N m]; empty if unspecified.
-        time_from_start: When to reach the point, from the trajectory start (a Duration or
-            seconds).
-    """
-
-    positions: list[float] = field(default_factory=list)
-    velocities: list[float] = field(default_factory=list)
-    accelerations: list[float] = field(default_factory=list)
-    effort: list[float] = field(default_factory=list)
-    time_from_start: Duration = field(default_factory=Duration)
-
-
-@dataclass(slots=True)
-class JointTrajectory(Message):
-    """``trajectory_msgs/JointTrajectory``: named joints and the waypoints they follow."""
-
-    header: Header = field(default_factory=Header)
-    joint_names: list[str] = field(default_factory=list)
-    points: list[JointTrajectoryPoint] = field(default_factory=list)
-
-
-@dataclass(slots=True)
-class MultiDOFJointTrajectoryPoint(Message):
-    """``trajectory_msgs/MultiDOFJointTrajectoryPoint``: one waypoint of multi-DOF joints."""
-
-    transforms: list[Transform] = field(default_factory=list)
-    velocities: list[Twist] = field(default_factory=list)
-    accelerations: list[Twist] = field(default_factory=list)
-    time_from_start: Duration = field(default_factory=Duration)
-
-
-@dataclass(slots=True)
-class MultiDOFJointTrajectory(Message):
-    """``trajectory_msgs/MultiDOFJointTrajectory``; leave it empty unless a server supports it."""
-
-    header: Header = field(default_factory=Header)
-    joint_names: list[str] = field(default_factory=list)
-    points: list[MultiDOFJointTrajectoryPoint] = field(default_factory=list)
-
-
-# --- control_msgs --------------------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class JointTolerance(Message):
-    """``control_msgs/JointTolerance``: 0 means "server default", -1 means "no limit".
-
-    Attributes:
-        name: Joint name.
-        position: Position tolerance [rad].
-        velocity: Velocity tolerance [rad/s].
-        acceleration: Acceleration tolerance [rad/s^2].
-    """
-
-    name: str = ""
-    position: float = 0.0
-    velocity: float = 0.0
-    acceleration: float = 0.0
-
-
-@dataclass(slots=True)
-class JointComponentTolerance(Message):
-    """``control_msgs/JointComponentTolerance``: a tolerance on one component of a multi-DOF joint."""
-
-    X_AXIS: ClassVar[int] = 1
-    Y_AXIS: ClassVar[int] = 2
-    Z_AXIS: ClassVar[int] = 3
-    TRANSLATION: ClassVar[int] = 4
-    ROTATION: ClassVar[int] = 5
-
-    joint_name: str = ""
-    component: int = 0
-    position: float = 0.0
-    velocity: float = 0.0
-    acceleration: float = 0.0
-
-
-@dataclass(slots=True)
-class FollowJointTrajectoryGoal(Message):
-    """Goal of ``control_msgs/action/FollowJointTrajectory``.
-
-    Attributes:
-        trajectory: The joint trajectory to follow.
-        multi_dof_trajectory: Multi-DOF part; a server without multi-DOF support rejects a
-            non-empty one.
-        path_tolerance: Per-joint tolerances checked during execution.
-        component_path_tolerance: Per-component tolerances of multi-DOF joints (path).
-        goal_tolerance: Per-joint tolerances checked at the end.
-        component_goal_tolerance: Per-component tolerances of multi-DOF joints (goal).
-        goal_time_tolerance: How long after the last point's time the goal tolerance may
-            still be reached (a Duration or seconds).
-    """
-
-    trajectory: JointTrajectory = field(default_factory=JointTrajectory)
-    multi_dof_trajectory: MultiDOFJointTrajectory = field(default_factory=MultiDOFJointTrajectory)
-    path_tolerance: list[JointTolerance] = field(default_factory=list)
-    component_path_tolerance: list[JointComponentTolerance] = field(default_factory=list)
-    goal_tolerance: list[JointTolerance] = field(default_factory=list)
-    component_goal_tolerance: list[JointComponentTolerance] = field(default_factory=list)
-    goal_time_tolerance: Duration = field(default_factory=Duration)
-
-
-@dataclass(slots=True)
-class FollowJointTrajectoryResult(Message):
-    """Result of ``FollowJointTrajectory``: an error code (0 on success) and a readable reason."""
-
-    SUCCESSFUL: ClassVar[int] = 0
-    INVALID_GOAL: ClassVar[int] = -1
-    INVALID_JOINTS: ClassVar[int] = -2
-    OLD_HEADER_TIMESTAMP: ClassVar[int] = -3
-    PATH_TOLERANCE_VIOLATED: ClassVar[int] = -4
-    GOAL_TOLERANCE_VIOLATED: ClassVar[int] = -5
-
-    error_code: int = 0
-    error_string: str = ""
-
-
-@dataclass(slots=True)
-class FollowJointTrajectoryFeedback(Message):
-    """Feedback of ``FollowJointTrajectory``: desired, actual and error points per joint."""
-
-    header: Header = field(default_factory=Header)
-    joint_names: list[str] = field(default_factory=list)
-    desired: JointTrajectoryPoint = field(default_factory=JointTrajectoryPoint)
-    actual: JointTrajectoryPoint = field(default_factory=JointTrajectoryPoint)
-    error: JointTrajectoryPoint = field(default_factory=JointTrajectoryPoint)
-
-
-# --- this library's behaviours ---------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class BehaviourResult(Message):
-    """Result shared by HighFive, Stand and Sit: did it work, and a readable account."""
-
-    success: bool = False
-    message: str = ""
-
-
-@dataclass(slots=True)
-class PhaseFeedback(Message):
-    """Feedback shared by HighFive, Stand and Sit.
-
-    Attributes:
-        phase: Name of the current phase (e.g. ``"raising"``).
-        progress: 0.0 -> 1.0, never decreasing within one goal.
-    """
-
-    phase: str = ""
-    progress: float = 0.0
-
-
-@dataclass(slots=True)
-class PoseGoal(Message):
-    """Goal shared by Stand and Sit: move to a pose.
-
-    Attributes:
-        duration_s: Time to reach the pose [s].
-    """
-
-    duration_s: float = 2.0
-
-
-@dataclass(slots=True)
-class HighFiveGoal(Message):
-    """Goal of HighFive: raise the front-right foot, hold it up, put it back down.
-
-    Attributes:
-        target_height: How high to raise the front leg [m].
-        hold_seconds: How long to hold the raised position [s].
-    """
-
-    target_height: float = 0.0
-    hold_seconds: int = 0
-
-
-class HighFiveResult(BehaviourResult):
-    """Result of HighFive."""
-
-    __slots__ = ()
-
-
-class HighFiveFeedback(PhaseFeedback):
-    """Feedback of HighFive; phases e.g. standing, shifting, raising, ready, lowering, complete."""
-
-    __slots__ = ()
-
-
-class StandGoal(PoseGoal):
-    """Goal of Stand: rise to the nominal standing pose in ``duration_s`` [s]."""
-
-    __slots__ = ()
-
-
-class StandResult(BehaviourResult):
-    """Result of Stand."""
-
-    __slots__ = ()
-
-
-class StandFeedback(PhaseFeedback):
-    """Feedback of Stand."""
-
-    __slots__ = ()
-
-
-class SitGoal(PoseGoal):
-    """Goal of Sit: lower the body to the resting pose in ``duration_s`` [s]."""
-
-    __slots__ = ()
-
-
-class SitResult(BehaviourResult):
-    """Result of Sit."""
-
-    __slots__ = ()
-
-
-class SitFeedback(PhaseFeedback):
-    """Feedback of Sit."""
-
-    __slots__ = ()

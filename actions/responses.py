@@ -18,7 +18,7 @@ from wbc.core.errors import ConfigurationError
 
 
 class GoalResponse(Enum):
-    """What a goal (or cancel) callback decides; return a :class:`Rejection` to explain a refusal."""
+    """What a goal (or cancel) callback decides; a :class:`Rejection` explains a refusal."""
 
     ACCEPT = "accept"
     REJECT = "reject"

@@ -6,8 +6,8 @@ from collections.abc import Callable
 from typing import Any
 
 from actions.behaviour import Behaviour, StepResult
+from actions.go2.go2_interfaces import HighFiveFeedback, HighFiveResult
 from actions.goal_status import GoalStatus
-from actions.messages import HighFiveFeedback, HighFiveResult
 from wbc.core.errors import ConfigurationError
 
 _METHODS = ("start", "step", "cancel", "abort_result")

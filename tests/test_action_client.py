@@ -10,19 +10,13 @@ from typing import Any, Self
 
 import pytest
 
-from actions.action_client import ActionClient
+from actions.action_client import ActionClient, ActionTimeoutError, RunnerStalledError
 from actions.action_runner import ActionRunner, BusyPolicy
 from actions.action_server import ActionServer
-from actions.action_type import HIGH_FIVE, STAND
-from actions.client_goal_handle import ClientGoalHandle
-from actions.errors import (
-    ActionTimeoutError,
-    ActionUsageError,
-    GoalRejectedError,
-    RunnerStalledError,
-)
+from actions.client_goal_handle import ClientGoalHandle, GoalRejectedError
+from actions.errors import ActionUsageError
+from actions.go2.go2_interfaces import HIGH_FIVE, STAND, HighFiveGoal, HighFiveResult, StandGoal
 from actions.goal_status import TERMINAL_STATUSES, GoalStatus
-from actions.messages import HighFiveGoal, HighFiveResult, StandGoal
 from actions.responses import GoalResponse, Rejection, WrappedResult
 from tests.scripted_behaviour import ScriptedBehaviour, scripted_factory
 from wbc.core.errors import ConfigurationError, WbcError

@@ -6,10 +6,9 @@ import re
 
 import pytest
 
-from actions.action_definition import parse_action_file
-from actions.action_type import ACTION_TYPES, FOLLOW_JOINT_TRAJECTORY
-from actions.go2.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, GO2_ACTIONS
-from actions.messages import (
+from actions import (
+    ACTION_TYPES,
+    FOLLOW_JOINT_TRAJECTORY,
     Duration,
     FollowJointTrajectoryGoal,
     HighFiveGoal,
@@ -18,6 +17,8 @@ from actions.messages import (
     SitGoal,
     StandGoal,
 )
+from actions.action_definition import parse_action_file
+from actions.go2.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, GO2_ACTIONS
 from sim.control_loop import ControlLoop
 
 #: Faulty ticks: torque limits of 0.1 % of the URDF's, so no tick is OK (a controller fault).

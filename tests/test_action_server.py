@@ -11,12 +11,14 @@ import pytest
 from actions.action_client import ActionClient
 from actions.action_runner import ActionRunner, BusyPolicy, Event
 from actions.action_server import ActionServer
-from actions.action_type import HIGH_FIVE, SIT, STAND, ActionType
+from actions.action_type import ActionType
 from actions.behaviour import Behaviour, StepResult
-from actions.client_goal_handle import ClientGoalHandle
-from actions.errors import ActionUsageError, GoalRejectedError
-from actions.goal_status import LEGAL_TRANSITIONS, GoalStatus
-from actions.messages import (
+from actions.client_goal_handle import ClientGoalHandle, GoalRejectedError
+from actions.errors import ActionUsageError
+from actions.go2.go2_interfaces import (
+    HIGH_FIVE,
+    SIT,
+    STAND,
     HighFiveFeedback,
     HighFiveGoal,
     HighFiveResult,
@@ -24,6 +26,7 @@ from actions.messages import (
     StandGoal,
     StandResult,
 )
+from actions.goal_status import LEGAL_TRANSITIONS, GoalStatus
 from actions.responses import (
     CancelResponse,
     CancelReturnCode,

@@ -1,4 +1,4 @@
-"""FollowJointTrajectory on the GO2: validation codes, the ROS 2 tutorial patterns, tolerances, cancel."""
+"""GO2 FollowJointTrajectory: validation codes, ROS 2 tutorial patterns, tolerances, cancel."""
 
 from __future__ import annotations
 

@@ -1,16 +1,17 @@
 """HighFive as an action in MuJoCo: phases, progress, cancellation, rejection, sim-to-real."""
 
+import itertools
+
 import numpy as np
 import pytest
 
-from actions import BusyPolicy, GoalRejectedError, GoalStatus, HighFiveGoal
+from actions import BusyPolicy, GoalRejectedError, GoalStatus, HighFiveGoal, StandGoal
 from actions.go2.high_five_behaviour import (
     INVALID_HOLD_SECONDS,
     INVALID_TARGET_HEIGHT,
     ROBOT_NOT_READY,
 )
 from actions.go2.robot_context import tilt_deg
-from actions.messages import StandGoal
 from sim.control_loop import ControlLoop
 from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES
 
@@ -64,7 +65,7 @@ def test_progress_is_monotone_and_feedback_at_least_20_hz(high_five_run):
     _, _, events, _ = high_five_run
     progress = [fb.progress for _, fb in events]
     assert progress[0] == 0.0 and progress[-1] == 1.0
-    assert all(b >= a for a, b in zip(progress, progress[1:]))
+    assert all(b >= a for a, b in itertools.pairwise(progress))
     times = np.array([t for t, _ in events])
     assert np.max(np.diff(times)) <= 0.05 + 1e-9
 
@@ -73,7 +74,7 @@ def cancel_instants():
     """20 instants over the 6.8 s of a 1 s-hold high five, one draw per stratum (seed 7)."""
     rng = np.random.default_rng(7)
     edges = np.linspace(0.02, 6.75, 21)
-    return [float(rng.uniform(a, b)) for a, b in zip(edges[:-1], edges[1:])]
+    return [float(rng.uniform(a, b)) for a, b in itertools.pairwise(edges)]
 
 
 @pytest.mark.parametrize("cancel_at", cancel_instants(), ids=lambda t: f"{t:.2f}s")
@@ -107,10 +108,13 @@ def test_cancel_at_any_instant(cancel_at):
 
 @pytest.mark.parametrize("goal,code,message", [
     (HighFiveGoal(target_height=0.7, hold_seconds=2), INVALID_TARGET_HEIGHT,
-     "target_height: expected a height of the front-right foot above the ground in [0.10, 0.50] m, received 0.7"),
+     ("target_height: expected a height of the front-right foot above the ground in "
+      "[0.10, 0.50] m, received 0.7")),
     (HighFiveGoal(target_height=-0.1, hold_seconds=2), INVALID_TARGET_HEIGHT, "received -0.1"),
-    (HighFiveGoal(target_height=float("nan"), hold_seconds=2), INVALID_TARGET_HEIGHT, "received nan"),
-    (HighFiveGoal(target_height=float("inf"), hold_seconds=2), INVALID_TARGET_HEIGHT, "received inf"),
+    (HighFiveGoal(target_height=float("nan"), hold_seconds=2), INVALID_TARGET_HEIGHT,
+     "received nan"),
+    (HighFiveGoal(target_height=float("inf"), hold_seconds=2), INVALID_TARGET_HEIGHT,
+     "received inf"),
     (HighFiveGoal(target_height=0.4, hold_seconds=-1), INVALID_HOLD_SECONDS,
      "hold_seconds: expected a whole number of seconds in [0, 60], received -1"),
     (HighFiveGoal(target_height=0.4, hold_seconds=61), INVALID_HOLD_SECONDS, "received 61"),
@@ -129,7 +133,8 @@ def test_fallen_robot_is_not_able():
     loop = ControlLoop.simulated()
     loop.context.q = loop.context.q.copy()
     loop.context.q[3:7] = [np.sin(0.5), 0.0, 0.0, np.cos(0.5)]  # rolled 57 deg
-    future = loop.client("high_five").send_goal_async(HighFiveGoal(target_height=0.4, hold_seconds=1))
+    future = loop.client("high_five").send_goal_async(
+        HighFiveGoal(target_height=0.4, hold_seconds=1))
     loop.runner.tick(loop.robot.time_s)
     handle = future.result()
     assert not handle.accepted and handle.rejection.code == ROBOT_NOT_READY
@@ -158,7 +163,8 @@ def test_high_five_stands_up_first_when_lying():
 
 def test_preempting_goal_ends_the_high_five_with_who_preempted_it():
     loop = ControlLoop.simulated(busy_policy=BusyPolicy.PREEMPT)
-    high_five = loop.client("high_five").send_goal_async(HighFiveGoal(target_height=0.4, hold_seconds=2))
+    high_five = loop.client("high_five").send_goal_async(
+        HighFiveGoal(target_height=0.4, hold_seconds=2))
     loop.spin_for(2.5)
     stand = loop.client("stand").send_goal_async(StandGoal(duration_s=1.0))
     loop.spin_once()

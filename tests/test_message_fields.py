@@ -5,9 +5,7 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from actions.errors import UnknownFieldError
-from actions.message_fields import set_message_fields
-from actions.messages import (
+from actions import (
     Duration,
     FollowJointTrajectoryGoal,
     HighFiveGoal,
@@ -15,6 +13,8 @@ from actions.messages import (
     JointTrajectory,
     JointTrajectoryPoint,
 )
+from actions.errors import UnknownFieldError
+from actions.message_fields import set_message_fields
 from wbc.core.errors import ConfigurationError
 
 

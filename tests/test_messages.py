@@ -9,17 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from actions import messages
-from actions.action_definition import (
-    FieldSpec,
-    MessageDefinition,
-    parse_action_file,
-    parse_action_text,
-    parse_message_text,
-)
-from actions.action_type import ACTION_TYPES, FOLLOW_JOINT_TRAJECTORY, HIGH_FIVE, INTERFACES_DIR
-from actions.errors import UnknownFieldError
-from actions.messages import (
+import actions as messages
+from actions import (
+    ACTION_TYPES,
+    FOLLOW_JOINT_TRAJECTORY,
+    HIGH_FIVE,
     Duration,
     FollowJointTrajectoryGoal,
     FollowJointTrajectoryResult,
@@ -31,6 +25,15 @@ from actions.messages import (
     Time,
     as_duration,
 )
+from actions.action_definition import (
+    FieldSpec,
+    MessageDefinition,
+    parse_action_file,
+    parse_action_text,
+    parse_message_text,
+)
+from actions.action_type import INTERFACES_DIR
+from actions.errors import UnknownFieldError
 from wbc.core.errors import ConfigurationError
 
 PRIMITIVES: dict[str, type] = {
@@ -288,7 +291,8 @@ FIELD_BY_FIELD = [
 
 
 @pytest.mark.parametrize(("cls", "name", "value", "message"), FIELD_BY_FIELD,
-                         ids=[f"{case[0].__name__}.{case[1]}={case[2]!r}" for case in FIELD_BY_FIELD])
+                         ids=[f"{case[0].__name__}.{case[1]}={case[2]!r}"
+                              for case in FIELD_BY_FIELD])
 def test_a_field_set_by_assignment_is_checked_when_validated_like_a_keyword(
     cls: type, name: str, value: object, message: str
 ) -> None:
@@ -349,7 +353,8 @@ def test_validated_copy_is_deep_normalised_and_leaves_the_original_as_it_was() -
     goal.trajectory.points.append(point)
     copy = goal.validated_copy()
     sent_point = copy.trajectory.points[0]
-    assert sent_point.positions == [1.0, 2.0] and all(type(x) is float for x in sent_point.positions)
+    assert sent_point.positions == [1.0, 2.0]
+    assert all(type(x) is float for x in sent_point.positions)
     assert sent_point.time_from_start == Duration(sec=1, nanosec=500_000_000)
     assert point.positions == (1, 2) and point.time_from_start == 1.5  # untouched
     assert sent_point is not point and copy.trajectory is not goal.trajectory

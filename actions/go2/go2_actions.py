@@ -1,32 +1,90 @@
-"""The GO2's action servers on one runner: high_five, stand, sit, follow_joint_trajectory."""
+"""The GO2's action servers on one runner: high_five, stand, sit, follow_joint_trajectory.
+
+Each action is one line of :data:`GO2_SERVED`: its name, its interface (made from its
+``.action`` file, :mod:`actions.go2.go2_interfaces`), its behaviour and its goal check. Adding
+an action takes its ``.action`` file in ``actions/interfaces/``, its behaviour and one line
+here, e.g. ``Go2Action("wave", ACTION_TYPES["Wave"], WaveBehaviour)``.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import partial
+from typing import Any
 
-from actions.action_runner import ActionRunner, BusyPolicy
-from actions.action_server import ActionServer
-from actions.action_type import FOLLOW_JOINT_TRAJECTORY, HIGH_FIVE, SIT, STAND, ActionType
+from actions.action_runner import ActionRunner
+from actions.action_server import ActionServer, Decision
+from actions.action_type import ActionType
+from actions.behaviour import Behaviour
+from actions.busy_policy import BusyPolicy
 from actions.go2.follow_joint_trajectory_behaviour import (
     FollowJointTrajectoryBehaviour,
     validate_follow_joint_trajectory_goal,
 )
+from actions.go2.go2_interfaces import (
+    HIGH_FIVE,
+    SIT,
+    STAND,
+    SitFeedback,
+    SitResult,
+    StandFeedback,
+    StandResult,
+)
 from actions.go2.high_five_behaviour import HighFiveBehaviour, validate_high_five_goal
 from actions.go2.pose_behaviour import PoseBehaviour, validate_pose_goal
 from actions.go2.robot_context import RobotContext
-from actions.messages import SitFeedback, SitResult, StandFeedback, StandResult
+from actions.ros_interfaces.control_msgs import FOLLOW_JOINT_TRAJECTORY
 
 #: Action names served for the GO2.
 HIGH_FIVE_ACTION, STAND_ACTION, SIT_ACTION = "high_five", "stand", "sit"
 FOLLOW_JOINT_TRAJECTORY_ACTION = "follow_joint_trajectory"
+
+
+@dataclass(frozen=True)
+class Go2Action:
+    """One action the GO2 serves, as a line of :data:`GO2_SERVED`.
+
+    Attributes:
+        name: The name clients use, e.g. ``"high_five"``.
+        interface: The action type, e.g. ``HIGH_FIVE``.
+        behaviour: Makes the behaviour of an accepted goal from the robot's context (a
+            Behaviour class taking the context first, or a ``functools.partial`` of one).
+        goal_callback: ``goal_callback(context, goal)`` accepts or rejects a goal (see
+            :class:`~actions.action_server.ActionServer`); ``None`` accepts every goal.
+        max_unwind_s: Longest unwind [s] after a cancel before the runner aborts the goal.
+    """
+
+    name: str
+    interface: ActionType
+    behaviour: Callable[[RobotContext], Behaviour[Any, Any, Any]]
+    goal_callback: Callable[[RobotContext, Any], Decision] | None = None
+    max_unwind_s: float = 3.0
+
+    def serve(self, runner: ActionRunner, context: RobotContext) -> ActionServer:
+        """The action's server on ``runner``, its behaviours and goal checks on ``context``."""
+        goal_callback = (None if self.goal_callback is None
+                         else partial(self.goal_callback, context))
+        return ActionServer(runner, self.interface, self.name, partial(self.behaviour, context),
+                            goal_callback=goal_callback, max_unwind_s=self.max_unwind_s)
+
+
+#: The GO2's actions, one line each.
+GO2_SERVED: tuple[Go2Action, ...] = (
+    Go2Action(HIGH_FIVE_ACTION, HIGH_FIVE, HighFiveBehaviour, validate_high_five_goal),
+    Go2Action(STAND_ACTION, STAND, partial(
+        PoseBehaviour, pose="standing", result_type=StandResult, feedback_type=StandFeedback,
+        phase_name="rising"), validate_pose_goal),
+    Go2Action(SIT_ACTION, SIT, partial(
+        PoseBehaviour, pose="lying", result_type=SitResult, feedback_type=SitFeedback,
+        phase_name="sitting"), validate_pose_goal),
+    Go2Action(FOLLOW_JOINT_TRAJECTORY_ACTION, FOLLOW_JOINT_TRAJECTORY,
+              FollowJointTrajectoryBehaviour, validate_follow_joint_trajectory_goal),
+)
 #: What :func:`make_go2_runner` serves, action name -> interface, for listing the actions
 #: without building a robot (``go2-wbc actions``).
 GO2_ACTIONS: dict[str, ActionType] = {
-    FOLLOW_JOINT_TRAJECTORY_ACTION: FOLLOW_JOINT_TRAJECTORY,
-    HIGH_FIVE_ACTION: HIGH_FIVE,
-    SIT_ACTION: SIT,
-    STAND_ACTION: STAND,
-}
+    action.name: action.interface for action in sorted(GO2_SERVED, key=lambda a: a.name)}
 
 
 def make_go2_runner(context: RobotContext, *,
@@ -37,16 +95,6 @@ def make_go2_runner(context: RobotContext, *,
     (rejected, or the running goal is preempted: see :class:`BusyPolicy`).
     """
     runner = ActionRunner(busy_policy=busy_policy)
-    ActionServer(runner, HIGH_FIVE, HIGH_FIVE_ACTION, partial(HighFiveBehaviour, context),
-                 goal_callback=partial(validate_high_five_goal, context), max_unwind_s=3.0)
-    ActionServer(runner, STAND, STAND_ACTION,
-                 partial(PoseBehaviour, context, "standing", StandResult, StandFeedback,
-                         "rising"), goal_callback=validate_pose_goal, max_unwind_s=3.0)
-    ActionServer(runner, SIT, SIT_ACTION,
-                 partial(PoseBehaviour, context, "lying", SitResult, SitFeedback, "sitting"),
-                 goal_callback=validate_pose_goal, max_unwind_s=3.0)
-    ActionServer(runner, FOLLOW_JOINT_TRAJECTORY, FOLLOW_JOINT_TRAJECTORY_ACTION,
-                 partial(FollowJointTrajectoryBehaviour, context),
-                 goal_callback=partial(validate_follow_joint_trajectory_goal, context),
-                 max_unwind_s=3.0)
+    for action in GO2_SERVED:
+        action.serve(runner, context)
     return runner

@@ -6,8 +6,8 @@ import math
 
 from actions.behaviour import Behaviour, StepResult
 from actions.feedback_throttle import FeedbackThrottle
+from actions.go2.go2_interfaces import HighFiveFeedback, HighFiveGoal, HighFiveResult
 from actions.go2.robot_context import RobotContext
-from actions.messages import HighFiveFeedback, HighFiveGoal, HighFiveResult
 from actions.responses import GoalResponse, Rejection
 from wbc.core.errors import WbcError
 from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M, LegLift, LiftPhase

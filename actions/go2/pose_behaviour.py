@@ -7,8 +7,8 @@ from typing import Any
 
 from actions.behaviour import Behaviour, StepResult
 from actions.feedback_throttle import FeedbackThrottle
+from actions.go2.go2_interfaces import PoseGoal
 from actions.go2.robot_context import RobotContext
-from actions.messages import PoseGoal
 from actions.responses import GoalResponse, Rejection
 from wbc.motions.posture_transition import PostureTransition, TransitionPhase
 
@@ -18,8 +18,14 @@ INVALID_DURATION = 20
 MIN_DURATION_S, MAX_DURATION_S = 0.5, 10.0
 
 
-def validate_pose_goal(goal: PoseGoal) -> GoalResponse | Rejection:
-    """The goal callback of Stand and Sit."""
+def validate_pose_goal(context: RobotContext, goal: PoseGoal) -> GoalResponse | Rejection:
+    """The goal callback of Stand and Sit: ACCEPT, or a coded rejection naming the range.
+
+    Args:
+        context: The robot's context, which every GO2 goal callback takes; unused, since a
+            Stand or a Sit may start from any pose.
+        goal: The goal.
+    """
     duration = goal.duration_s
     if not isinstance(duration, (int, float)) or not math.isfinite(duration) or not (
             MIN_DURATION_S <= duration <= MAX_DURATION_S):
