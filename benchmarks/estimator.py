@@ -34,19 +34,17 @@ from typing import Any
 
 import numpy as np
 
-from actions.messages import HighFiveGoal
-from benchmarks.loop_timing import _json_safe, machine
-from benchmarks.robustness import (
-    SETTLE_S,
-    PlantCase,
-    hold_push,
-    make_loop,
-    run_high_five,
-)
-from sim.run_recorder import MetricsHook
+from benchmarks.reporting import json_safe, machine
+from benchmarks.robustness import PlantCase, hold_push, run_high_five
+from sim.control_loop import ControlLoop
+from sim.episode import episode_default
+from sim.episode_runner import EpisodeRunner
+from wbc.controller.control_output import ControlOutput
 from wbc.estimation.estimators import ESTIMATORS, make_estimator
 from wbc.robot_io.sensor_record import SensorRecord
 
+#: The high five of the first rows and of the recorded records: the default episode's.
+GOAL = episode_default("goal")
 #: The state sources compared: the simulator's truth, then each estimator by name.
 SOURCES = ("truth", *ESTIMATORS)
 #: Pushes of the push rows: (direction [deg], impulse [N s]).
@@ -75,7 +73,8 @@ def _row(source: str, scenario: str, status: str, summary: Any) -> dict[str, Any
 
 def high_five_row(source: str, control_period_s: float) -> dict[str, Any]:
     """The high five (0.40 m, hold 2 s) at a control period, measured."""
-    episode = run_high_five(case(source, control_period_s), hold_s=2, height_m=0.40)
+    episode = run_high_five(case(source, control_period_s), hold_s=GOAL.hold_seconds,
+                            height_m=GOAL.target_height)
     return _row(source, f"high five, {1.0 / control_period_s:g} Hz", episode.status.name,
                 episode.summary)
 
@@ -98,36 +97,34 @@ def push_row(source: str, pushes: Sequence[tuple[float, float]]) -> dict[str, An
 
 def standing_row(source: str, seconds: float) -> dict[str, Any]:
     """Standing ``seconds`` [s] after the settle: the estimate's drift."""
-    loop = make_loop(case(source))
-    loop.spin_for(SETTLE_S)
-    hook = MetricsHook(loop, lambda: "")
-    loop.hooks.append(hook)
-    loop.spin_for(seconds)
-    status = "STANDING" if loop.controller.failures == 0 else "FAULTS"
-    return _row(source, f"standing {seconds:g} s", status, hook.metrics.summary(1.0))
+    episode = case(source).episode(height_m=GOAL.target_height, hold_s=GOAL.hold_seconds)
+    episode = episode.replace(action=None, after_s=seconds)
+    result = EpisodeRunner(episode, metrics=True).run()
+    status = "STANDING" if result.loop.controller.failures == 0 else "FAULTS"
+    return _row(source, f"standing {seconds:g} s", status, result.metrics)
 
 
-def recorded_records(seconds_after_goal: float = 7.0) -> list[tuple[SensorRecord, np.ndarray]]:
-    """The sensor records and contact schedules of a high five (controller on the default
-    estimator), in the description's orders."""
-    loop = make_loop(case(next(iter(ESTIMATORS))))
-    loop.spin_for(SETTLE_S)
-    client = loop.client("high_five")
-    client.send_goal_async(HighFiveGoal(target_height=0.40, hold_seconds=2))
-    records = []
-    read = loop.robot.read_sensors
+class _Records:
+    """Every sensor record the estimator read, with the contact schedule it was given (a
+    loop hook)."""
 
-    def recording() -> SensorRecord | None:
-        sample = read()
+    def __init__(self) -> None:
+        self.records: list[tuple[SensorRecord, np.ndarray]] = []
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        sample = loop.estimator.last_sample
         if sample is not None:
-            schedule = np.zeros(4)
-            loop.controller.normal_force_bounds(schedule)
-            records.append((sample.copy(), schedule))
-        return sample
+            self.records.append((sample.copy(), loop.estimator.last_schedule))
 
-    loop.robot.read_sensors = recording  # type: ignore[method-assign]
-    loop.spin_for(seconds_after_goal)
-    return records
+
+def recorded_records() -> list[tuple[SensorRecord, np.ndarray]]:
+    """The sensor records and contact schedules of a high five (0.40 m, hold 2 s; the
+    controller on the default estimator), in the description's orders."""
+    recording = _Records()
+    episode = case(next(iter(ESTIMATORS))).episode(height_m=GOAL.target_height,
+                                                   hold_s=GOAL.hold_seconds)
+    EpisodeRunner(episode, hooks=[recording]).run()
+    return recording.records
 
 
 def cost_row(name: str, records: list[tuple[SensorRecord, np.ndarray]]) -> dict[str, Any]:
@@ -172,8 +169,8 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
 def format_report(report: dict[str, Any]) -> str:
     """The report as plain text tables."""
     m = report["machine"]
-    lines = [f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}; mode "
-             f"{report['mode']}", ""]
+    header = f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}"
+    lines = [f"{header}; mode {report['mode']}", ""]
     head = (f"{'scenario':<20}{'state':<7}{'status':>20}{'track':>7}{'hold':>6}{'v RMS':>7}"
             f"{'v max':>7}{'h max':>7}{'h drift':>8}{'roll':>6}{'pitch':>6}{'drift':>7}"
             f"{'max':>6}{'yaw':>7}")
@@ -212,7 +209,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     report["benchmark_wall_s"] = round(time.perf_counter() - started, 1)
     print(format_report(report))
     args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(_json_safe(report), indent=1, allow_nan=False))
+    args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False))
     print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
     return 0
 

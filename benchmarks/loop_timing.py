@@ -2,16 +2,17 @@
 
 Run ``python -m benchmarks.loop_timing [--quick] [--json PATH]``.
 
-The episode is the command line's default high five (``go2-wbc high-five``: its height and
-hold, the default plant and sensors, the controller on the estimated state, the robot
-standing :data:`sim.cli.SETTLE_S` before the goal), at 1 kHz and at 500 Hz
-(``control_period_s=2e-3``, two 1 ms physics steps per tick), and the same on the
+The episode is the default :class:`sim.episode.Episode`, which is ``go2-wbc high-five``'s
+(its height and hold, the default plant and sensors, the controller on the estimated state,
+the robot standing its ``settle_s`` before the goal), run by
+:class:`sim.episode_runner.EpisodeRunner` as the command line runs it, at 1 kHz and at 500
+Hz (``control_period_s=2e-3``, two 1 ms physics steps per tick), and the same on the
 simulator's exact state (``--state truth``) for comparison: the estimate's cost is the ratio
 of the two real-time factors. Each rate and state gets two episodes on fresh loops, both
 timed from the goal's sending to its result, as the command line times a run:
 
-1. Per-tick breakdown: a loop of this module that calls the pieces ``spin_once`` calls, in
-   its order, with ``time.perf_counter`` around each (listed below).
+1. Per-tick breakdown: the runner ticks with :class:`benchmarks.timed_ticks.TimedTicks`, which
+   calls the pieces ``spin_once`` calls, in its order, timed one by one (listed below).
 2. Real-time factor: ``ControlLoop.spin_once`` until the result, as the command line drives
    it; sim time over wall time, and the process's CPU time over that wall time (well below
    1: other processes took the cores). It runs second, so that it measures the loop rather
@@ -46,232 +47,78 @@ holds the foot 0 s instead of the command line's default and skips that run.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import importlib.metadata
 import json
-import math
-import os
-import platform
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-import mujoco
 import numpy as np
 
-from actions.messages import (
-    FollowJointTrajectoryGoal,
-    HighFiveGoal,
-    JointTrajectory,
-    JointTrajectoryPoint,
-    SitGoal,
-    StandGoal,
-)
-from sim.cli import SETTLE_S, build_parser
-from sim.control_loop import PHYSICS_TIMESTEP_S, ControlLoop
-from sim.plant import Plant
-from sim.run_recorder import MetricsHook
+from actions.go2.go2_interfaces import HighFiveGoal, SitGoal, StandGoal
+from actions.ros_interfaces.control_msgs import FollowJointTrajectoryGoal
+from actions.ros_interfaces.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
+from benchmarks.reporting import json_safe, machine
+from benchmarks.timed_ticks import TimedTicks
+from sim.episode import Episode, episode_default
+from sim.episode_result import NO_GOAL
+from sim.episode_runner import EpisodeRunner, build_loop
 
 #: Control periods [s] of the runs: 1 kHz and the GO2's usual 500 Hz.
 PERIODS_S = (1e-3, 2e-3)
-#: Parts of a tick, in the order the loop runs them (``rest`` is split around physics).
-PARTS = ("sensors", "estimator", "actions", "controller", "rest", "physics")
 #: Where the controller's state comes from in the runs, and the runs' order at each rate.
 STATES = ("estimate", "truth")
 #: The hold [s] of a quick run.
 QUICK_HOLD_S = 0
+#: The packages whose versions the report lists.
 PACKAGES = ("mujoco", "numpy", "numba", "pin", "daqp")
-#: Sim time [s] after which a goal that has not ended counts as stuck.
-GOAL_LIMIT_S = 60.0
 
 
-def cli_defaults() -> dict[str, Any]:
-    """What ``go2-wbc high-five`` runs with no options: goal, plant and rates."""
-    args = build_parser().parse_args(["high-five"])
-    plant = Plant.preset(args.plant).with_params(**dict(args.plant_param))
-    return {"target_height": args.height, "hold_seconds": args.hold, "plant": plant,
-            "control_rate_hz": args.control_rate, "settle_s": SETTLE_S}
+def episode_defaults() -> dict[str, Any]:
+    """The default episode's goal, plant and rates (``go2-wbc high-five``'s, with no options)."""
+    goal = episode_default("goal")
+    return {"target_height": goal.target_height, "hold_seconds": goal.hold_seconds,
+            "plant": Episode().plant_model,
+            "control_rate_hz": 1.0 / episode_default("control_period_s"),
+            "settle_s": episode_default("settle_s")}
 
 
-def _build(period_s: float, plant: Plant, metrics: bool, state: str = "estimate"
-           ) -> tuple[ControlLoop, list[str]]:
-    """A standing loop at ``period_s`` as ``go2-wbc`` builds it, settled; and the list whose
-    one entry the episode's feedback keeps at the goal's phase (for the metrics hook)."""
-    loop = ControlLoop.simulated(pose="standing", plant=plant, control_period_s=period_s,
-                                 physics_timestep_s=min(PHYSICS_TIMESTEP_S, period_s),
-                                 state=state)
-    loop.spin_for(SETTLE_S)
-    phase = [""]
-    if metrics:
-        loop.hooks.append(MetricsHook(loop, lambda: phase[0]))
-    return loop, phase
+def _run(period_s: float, goal: HighFiveGoal, state: str, metrics: bool, *,
+         instrumented: bool = False) -> tuple[dict[str, Any], TimedTicks | None]:
+    """One high five from its sending to its result on a fresh loop: sim time, wall time,
+    CPU share; ``instrumented``: its ticks run as :class:`TimedTicks`, which come back."""
+    runner = EpisodeRunner(Episode(goal=goal, control_period_s=period_s, state=state),
+                           metrics=metrics)
+    timed = None
+    if instrumented:
+        timed = TimedTicks(runner.loop)
+        with timed.timing_mj_step():
+            result = runner.run(tick=timed)
+    else:
+        result = runner.run()
+    return {"status": result.status, "ticks": result.ticks, "sim_s": result.sim_s,
+            "wall_s": result.wall_s, "real_time_factor": result.sim_s / result.wall_s,
+            "cpu_share": result.cpu_s / result.wall_s,
+            "feedback_messages": len(result.feedback)}, timed
 
 
-class _Episode:
-    """One goal from its sending to its result; ``tick`` runs one control period."""
-
-    def __init__(self, loop: ControlLoop, goal: Any, phase: list[str], *,
-                 action: str = "high_five"):
-        self.loop = loop
-        self.phase = phase
-        self.feedback = 0
-        self.handle_future = loop.client(action).send_goal_async(
-            goal, feedback_callback=self._on_feedback)
-        self.result_future = None
-
-    def _on_feedback(self, message: Any) -> None:
-        self.feedback += 1
-        self.phase[0] = getattr(message.feedback, "phase", "")  # FollowJointTrajectory's has none
-
-    def done(self) -> bool:
-        """Whether the result has come (or the goal was rejected)."""
-        if self.result_future is None:
-            if not self.handle_future.done():
-                return False
-            handle = self.handle_future.result()
-            if not handle.accepted:
-                return True
-            self.result_future = handle.get_result_async()
-        return self.result_future.done()
-
-    def status(self) -> str:
-        """The goal's final status name."""
-        if self.result_future is None:
-            return "REJECTED"
-        return self.result_future.result().status.name
-
-
-def _run(loop: ControlLoop, phase: list[str], goal: HighFiveGoal, tick: Callable[[], Any]
-         ) -> dict[str, Any]:
-    """Tick until the goal ends; sim time, wall time, CPU share."""
-    episode = _Episode(loop, goal, phase)
-    sim_start = loop.robot.time_s
-    ticks = 0
-    wall = time.perf_counter()
-    cpu = time.process_time()
-    while not episode.done():
-        if loop.robot.time_s - sim_start > GOAL_LIMIT_S:
-            raise RuntimeError(f"the goal did not end within {GOAL_LIMIT_S:g} s of sim time")
-        tick()
-        ticks += 1
-    wall = time.perf_counter() - wall
-    cpu = time.process_time() - cpu
-    sim_s = loop.robot.time_s - sim_start
-    return {"status": episode.status(), "ticks": ticks, "sim_s": sim_s, "wall_s": wall,
-            "real_time_factor": sim_s / wall, "cpu_share": cpu / wall,
-            "feedback_messages": episode.feedback}
-
-
-class _TimedTicks:
-    """The pieces of ``ControlLoop.spin_once``, called in its order and timed one by one.
-
-    While :meth:`timing_mj_step` is active, ``mujoco.mj_step`` is wrapped to time each call
-    (about 0.1 us added to ``physics``), so that ``physics.mj_step`` is the steps the loop
-    really took, with the caches as the tick left them.
-    """
-
-    def __init__(self, loop: ControlLoop):
-        self.loop = loop
-        self.samples: dict[str, list[float]] = {p: [] for p in (*PARTS, "tick")}
-        self.stages: dict[str, list[float]] = {}
-        self.mj_step: list[float] = []
-        self._stepped = 0.0  # seconds in mj_step since the last tick began
-
-    @contextlib.contextmanager
-    def timing_mj_step(self) -> Iterator[None]:
-        """Time every ``mujoco.mj_step`` call inside the block."""
-        step, clock = mujoco.mj_step, time.perf_counter
-
-        def timed(*args: Any, **kwargs: Any) -> None:
-            start = clock()
-            step(*args, **kwargs)
-            self._stepped += clock() - start
-
-        mujoco.mj_step = timed
-        try:
-            yield
-        finally:
-            mujoco.mj_step = step
-
-    def __call__(self) -> None:
-        loop, clock = self.loop, time.perf_counter
-        robot, context, controller = loop.robot, loop.context, loop.controller
-        self._stepped = 0.0
-        t0 = clock()
-        now = robot.time_s
-        if loop.estimator is None:
-            q, v = robot.read_state()
-            ts = clock()
-        else:
-            record = robot.read_sensors()
-            ts = clock()
-            q, v = loop.estimate_state(record)
-        t1 = clock()
-        context.observe(now, q, v)
-        loop.runner.tick(now)
-        t2 = clock()
-        raw = loop.command(q, v)
-        t3 = clock()
-        out = loop.guard(raw, v)
-        context.record_output(out)
-        loop.last_output = out
-        t4 = clock()
-        robot.write_command(out)
-        t5 = clock()
-        for hook in loop.hooks:
-            hook(loop, out)
-        t6 = clock()
-        for part, seconds in zip(PARTS, (ts - t0, t1 - ts, t2 - t1, t3 - t2,
-                                         (t4 - t3) + (t6 - t5), t5 - t4)):
-            self.samples[part].append(seconds)
-        self.samples["tick"].append(t6 - t0)
-        self.mj_step.append(self._stepped)
-        for stage, seconds in raw.timings.items():
-            self.stages.setdefault(stage, []).append(seconds)
-
-    def breakdown(self) -> dict[str, dict[str, float]]:
-        """Per-part statistics [us]; ``controller.<stage>`` and ``physics.mj_step`` below."""
-        out = {part: _stats_us(self.samples[part])
-               for part in ("sensors", "estimator", "actions", "controller")}
-        out.update({f"controller.{k}": _stats_us(v) for k, v in self.stages.items()})
-        out["physics"] = _stats_us(self.samples["physics"])
-        out["physics.mj_step"] = _stats_us(self.mj_step)
-        out["rest"] = _stats_us(self.samples["rest"])
-        out["tick"] = _stats_us(self.samples["tick"])
-        around = np.subtract(self.samples["tick"], self.samples["controller"])
-        out["around controller"] = _stats_us(around)
-        return out
-
-def _stats_us(seconds: Sequence[float]) -> dict[str, float]:
-    values = np.asarray(seconds, dtype=float) * 1e6
-    if values.size == 0:
-        return {"median": math.nan, "p99": math.nan, "mean": math.nan, "samples": 0}
-    return {"median": float(np.median(values)), "p99": float(np.percentile(values, 99)),
-            "mean": float(values.mean()), "samples": int(values.size)}
-
-
-def run_rate(period_s: float, goal: HighFiveGoal, plant: Plant, *, metrics: bool = False,
+def run_rate(period_s: float, goal: HighFiveGoal, *, metrics: bool = False,
              state: str = "estimate") -> dict[str, Any]:
     """The two episodes at one control period: the breakdown, then the real-time factor."""
-    physics_s = min(PHYSICS_TIMESTEP_S, period_s)
     # The instrumented episode first: the process's first goal also pays one-off costs
     # (compiled code loaded, memory first touched), about 10 % of a 1 kHz episode.
-    loop, phase = _build(period_s, plant, metrics, state)
-    timed = _TimedTicks(loop)
-    with timed.timing_mj_step():
-        instrumented = _run(loop, phase, goal, timed)
-    loop, phase = _build(period_s, plant, metrics, state)
-    plain = _run(loop, phase, goal, loop.spin_once)
+    instrumented, timed = _run(period_s, goal, state, metrics, instrumented=True)
+    plain, _ = _run(period_s, goal, state, metrics)
+    episode = Episode(goal=goal, control_period_s=period_s, state=state)
     return {
         "name": (f"{1.0 / period_s:g} Hz, {'estimated' if state == 'estimate' else 'truth'}"
                  + (" + metrics hook" if metrics else "")),
         "state": state,
         "control_period_s": period_s,
-        "physics_timestep_s": physics_s,
-        "physics_steps_per_tick": round(period_s / physics_s),
+        "physics_timestep_s": episode.timestep_s,
+        "physics_steps_per_tick": round(period_s / episode.timestep_s),
         "hooks": ["MetricsHook"] if metrics else [],
         **plain,
         "per_tick_us": timed.breakdown(),
@@ -285,40 +132,43 @@ def run_rate(period_s: float, goal: HighFiveGoal, plant: Plant, *, metrics: bool
 FRESH_TRAJECTORY = (("FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"), (-0.1, 0.2, -1.6), 1.0)
 
 
-def fresh_process_ticks(goal: HighFiveGoal, plant: Plant) -> dict[str, dict[str, Any]]:
+def fresh_process_ticks(goal: HighFiveGoal) -> dict[str, dict[str, Any]]:
     """In this process (meant to be a new one): build the loop as ``go2-wbc`` does, then time
-    every tick of its first :data:`SETTLE_S` standing and of one goal of each action
-    (high five, a one-leg FollowJointTrajectory, sit, stand), one after the other.
+    every tick of its first settle standing and of one goal of each action (high five, a
+    one-leg FollowJointTrajectory, sit, stand), one after the other on the same loop.
 
     The worst tick of a fresh process is where one-off work lands (compiled code loaded
     from numba's cache, a QP layout or solver structure built, a file read): on a robot it
     is a stalled control period. Returns per part: ticks, status, max, p99.9 and median [us].
     """
-    clock = time.perf_counter
-    start = clock()
-    loop = ControlLoop.simulated(pose="standing", plant=plant)
-    parts: dict[str, dict[str, Any]] = {"construction": {"wall_ms": (clock() - start) * 1e3}}
-
-    def timed(until: Callable[[], bool]) -> list[float]:
-        ticks = []
-        while not until():
-            begin = clock()
-            loop.spin_once()
-            ticks.append(clock() - begin)
-        return ticks
-
-    end = loop.robot.time_s + SETTLE_S - 1e-9
-    parts["first ticks (standing)"] = _tick_stats(timed(lambda: loop.robot.time_s >= end),
-                                                  "SUCCEEDED")
     names, positions, seconds = FRESH_TRAJECTORY
     trajectory = JointTrajectory(joint_names=list(names), points=[
         JointTrajectoryPoint(positions=list(positions), time_from_start=seconds)])
-    for action, message in (("high_five", goal),
-                            ("follow_joint_trajectory",
-                             FollowJointTrajectoryGoal(trajectory=trajectory)),
-                            ("sit", SitGoal()), ("stand", StandGoal())):
-        episode = _Episode(loop, message, [""], action=action)
-        parts[action] = _tick_stats(timed(episode.done), episode.status())
+    # Each goal is sent at once, on the loop as the previous one left it.
+    episodes = {"first ticks (standing)": Episode(action=None, settle_s=0.0,
+                                                  after_s=episode_default("settle_s")),
+                "high_five": Episode(goal=goal, settle_s=0.0),
+                "follow_joint_trajectory": Episode(
+                    action="follow_joint_trajectory", settle_s=0.0,
+                    goal=FollowJointTrajectoryGoal(trajectory=trajectory)),
+                "sit": Episode(action="sit", goal=SitGoal(), settle_s=0.0),
+                "stand": Episode(action="stand", goal=StandGoal(), settle_s=0.0)}
+    clock = time.perf_counter
+    start = clock()
+    loop = build_loop(episodes["high_five"])
+    parts: dict[str, dict[str, Any]] = {"construction": {"wall_ms": (clock() - start) * 1e3}}
+    ticks: list[float] = []
+
+    def timed() -> None:
+        begin = clock()
+        loop.spin_once()
+        ticks.append(clock() - begin)
+
+    for part, episode in episodes.items():
+        ticks.clear()
+        result = EpisodeRunner(episode, loop=loop).run(tick=timed)
+        status = "SUCCEEDED" if result.status == NO_GOAL else result.status
+        parts[part] = _tick_stats(list(ticks), status)
     return parts
 
 
@@ -341,29 +191,9 @@ def run_fresh_process(quick: bool) -> dict[str, dict[str, Any]]:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def machine() -> dict[str, Any]:
-    """CPU, cores, load, Python and the versions of the packages that matter here."""
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    versions = {}
-    for package in PACKAGES:
-        try:
-            versions[package] = importlib.metadata.version(package)
-        except importlib.metadata.PackageNotFoundError:
-            versions[package] = None
-    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "load_average_1_5_15_min": list(os.getloadavg()), "versions": versions}
-
-
 def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:
     """Every run; the report as a dict."""
-    defaults = cli_defaults()
+    defaults = episode_defaults()
     hold = QUICK_HOLD_S if quick else defaults["hold_seconds"]
     goal = HighFiveGoal(target_height=defaults["target_height"], hold_seconds=hold)
     plant = defaults["plant"]
@@ -372,7 +202,7 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
     runs = []
     for period_s, metrics, state in plan:
         log(f"{1.0 / period_s:g} Hz on the {state}{' with the metrics hook' if metrics else ''}")
-        runs.append(run_rate(period_s, goal, plant, metrics=metrics, state=state))
+        runs.append(run_rate(period_s, goal, metrics=metrics, state=state))
     ratios = {}
     for period_s in PERIODS_S:
         rtf = {r["state"]: r["real_time_factor"] for r in runs
@@ -381,7 +211,7 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
     log("a fresh process: its first ticks and each action's first goal")
     fresh = run_fresh_process(quick)
     return {
-        "machine": machine(),
+        "machine": machine(PACKAGES, with_platform=False),
         "mode": "quick" if quick else "full",
         "episode": {"action": "high_five", "target_height_m": goal.target_height,
                     "hold_seconds": goal.hold_seconds, "plant": plant.name,
@@ -446,17 +276,6 @@ def format_report(report: dict[str, Any]) -> str:
     return "\n".join(lines + [""] + report["notes"])
 
 
-def _json_safe(value: Any) -> Any:
-    """Non-finite numbers become ``null`` (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    return value
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point."""
     parser = argparse.ArgumentParser(prog="python -m benchmarks.loop_timing",
@@ -468,10 +287,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--fresh-process-child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.fresh_process_child:  # the fresh-process run's child: one JSON line
-        defaults = cli_defaults()
+        defaults = episode_defaults()
         hold = QUICK_HOLD_S if args.quick else defaults["hold_seconds"]
         goal = HighFiveGoal(target_height=defaults["target_height"], hold_seconds=hold)
-        print(json.dumps(fresh_process_ticks(goal, defaults["plant"])))
+        print(json.dumps(fresh_process_ticks(goal)))
         return 0
     started = time.perf_counter()
     report = run(quick=args.quick, log=lambda msg: print(
@@ -479,7 +298,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     report["benchmark_wall_s"] = time.perf_counter() - started
     print(format_report(report))
     args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(_json_safe(report), indent=1, allow_nan=False))
+    args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False))
     print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
     return 0
 

@@ -2,9 +2,10 @@
 
 Run ``python -m benchmarks.robustness [--quick] [--json PATH] [--jobs N]``.
 
-Measured in closed loop through the public API (``sim.control_loop.ControlLoop`` with the
-default :class:`wbc.WholeBodyController`, a HighFive goal of 0.40 m), on the default
-``menagerie`` plant unless a row says otherwise:
+Measured in closed loop through the public API (each run a :class:`sim.episode.Episode` run
+by :class:`sim.episode_runner.EpisodeRunner`: the default :class:`wbc.WholeBodyController`,
+a HighFive goal of 0.40 m), on the default ``menagerie`` plant unless a row says otherwise
+(the rows' plants: :mod:`benchmarks.plant_cases`):
 
 1. Pushes on the base during a 1 s hold: direction x impulse (0.1 s pushes, starting 0.2 s
    into the hold) -> S (SUCCEEDED), A (ABORTED with the robot up), F (fell: the base came
@@ -34,38 +35,48 @@ import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from actions.go2.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_deg
 from actions.goal_status import GoalStatus
-from actions.messages import HighFiveGoal
-from benchmarks.qp_timing import machine
-from sim.cli import MetricsHook
+from benchmarks.plant_cases import (
+    CALF_SWEEP,
+    COMPENSATION_CASES,
+    JOINT_SWEEP,
+    NOMINAL_CASE,
+    PLANT_CASES,
+    QUICK_CALF_SWEEP,
+    QUICK_JOINT_SWEEP,
+    QUICK_PLANT_CASES,
+    SWEEP_HOLD_S,
+    PlantCase,
+)
+from benchmarks.reporting import machine
+from benchmarks.robustness_report import format_report
 from sim.control_loop import ControlLoop, TickHook
-from sim.disturbances import Push, PushSchedule
+from sim.disturbances import Push
+from sim.episode import Episode, episode_default
 from sim.episode_metrics import EpisodeSummary
-from sim.plant import Plant
-from sim.sensor_faults import SensorFault
-from sim.sensors import DEFAULT_SENSORS, SensorModel
+from sim.episode_runner import EpisodeRunner, build_loop
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.whole_body_controller import WholeBodyController
-from wbc.estimation.estimators import DEFAULT_ESTIMATOR, make_estimator
+from wbc.core.errors import WbcError
 from wbc.model.description import LEGS
 from wbc.motions.leg_lift import LegLiftTiming
 
-HEIGHT_M, HOLD_S = 0.40, 1
-#: The robot stands this long [s] before the goal is sent (the plant spawns without contact
-#: forces; its feet settle in the first 20 ms).
-SETTLE_S = 0.3
+#: The high five: the default episode's height [m], and a 1 s hold [s].
+HEIGHT_M, HOLD_S = episode_default("goal").target_height, 1
+#: The robot stands this long [s] before the goal is sent (the default episode's settle).
+SETTLE_S = episode_default("settle_s")
 #: The hold starts this long [s] after the goal (shift, unload, raise).
 HOLD_START_S = LegLiftTiming().shift_s + LegLiftTiming().unload_s + LegLiftTiming().raise_s
 #: Pushes start this long [s] into the hold and last PUSH_DURATION_S [s].
 PUSH_INTO_HOLD_S, PUSH_DURATION_S = 0.2, 0.1
 #: The loop runs on this long [s] after the result, to see where the robot comes to rest.
 AFTER_S = 0.5
-#: Sim time [s] a goal may take before the run gives up on it.
+#: Sim time [s] a goal may take before the run cancels it.
 TIMEOUT_S = 30.0
 #: Below this base height [m], at any time, the robot has fallen.
 FALLEN_HEIGHT_M = 0.2
@@ -77,90 +88,9 @@ IMPULSES_NS = (2.0, 4.0, 6.0, 8.0, 10.0)
 QUICK_DIRECTIONS_DEG = (90, 315)
 QUICK_IMPULSES_NS = (4.0, 8.0)
 
-MENAGERIE = Plant.preset("menagerie")
-
-
-@dataclass(frozen=True)
-class PlantCase:
-    """One row of the plant table: a plant, and the sensors and delay between it and the loop."""
-
-    name: str = "nominal"
-    plant: Plant = field(default_factory=Plant)
-    #: Control periods between a command and the drivers applying it.
-    delay_ticks: int = 0
-    #: Control period [s] (1 ms: 1 kHz; 2 ms: 500 Hz).
-    control_period_s: float = 1e-3
-    #: What the robot measures (a :class:`sim.sensors.SensorModel` or a preset's name).
-    sensors: SensorModel | str = DEFAULT_SENSORS
-    #: Where the controller's state comes from: ``estimate`` (default) or ``truth``.
-    state: str = "estimate"
-    #: Sensor faults, their times counted from the goal's start [s].
-    sensor_faults: tuple[SensorFault, ...] = ()
-    #: The state estimator (:data:`wbc.estimation.estimators.ESTIMATORS`), when estimating.
-    estimator: str = DEFAULT_ESTIMATOR
-
-    def sensor_model(self) -> SensorModel:
-        """The sensor model (the preset resolved)."""
-        return (SensorModel.preset(self.sensors) if isinstance(self.sensors, str)
-                else self.sensors)
-
-
-GO2_SENSORS = SensorModel.preset(DEFAULT_SENSORS)
-PLANT_CASES = (
-    PlantCase(),
-    PlantCase("foot friction 0.5", MENAGERIE.with_params(foot_friction=0.5)),
-    PlantCase("foot friction 0.35", MENAGERIE.with_params(foot_friction=0.35)),
-    PlantCase("payload 1.5 kg", MENAGERIE.with_params(payload_kg=1.5)),
-    PlantCase("payload 3 kg", MENAGERIE.with_params(payload_kg=3.0)),
-    PlantCase("ideal plant", Plant.preset("ideal")),
-    PlantCase("unitree-mujoco plant", Plant.preset("unitree-mujoco")),
-    PlantCase("identified plant", Plant.preset("identified")),
-    PlantCase("delay 1 tick", delay_ticks=1),
-    PlantCase("delay 2 ticks", delay_ticks=2),
-    PlantCase("delay 4 ticks", delay_ticks=4),
-    PlantCase("joint noise 1e-3 rad, 0.05 rad/s", sensors=GO2_SENSORS.with_params(
-        joint_position_noise_rad=1e-3, joint_velocity_noise_rad_s=0.05)),
-    PlantCase("joint noise 5e-3 rad, 0.1 rad/s", sensors=GO2_SENSORS.with_params(
-        joint_position_noise_rad=5e-3, joint_velocity_noise_rad_s=0.1)),
-    PlantCase("all: friction 0.5, 1.5 kg, delay 2, noise 1e-3",
-              MENAGERIE.with_params(foot_friction=0.5, payload_kg=1.5), delay_ticks=2,
-              sensors=GO2_SENSORS.with_params(joint_position_noise_rad=1e-3)),
-)
-QUICK_PLANT_CASES = (PLANT_CASES[1], PLANT_CASES[9])
-
-#: Payload of the sweeps: 2 kg, 5 cm in front of the base's centre.
-SWEEP_PAYLOAD = {"payload_kg": 2.0, "payload_offset_m": (0.05, 0.0, 0.0)}
-
-
-def _sweep_case(base: Plant, label: str, payload: bool, **joints: float) -> PlantCase:
-    changes = {**joints, **(SWEEP_PAYLOAD if payload else {})}
-    return PlantCase(f"{label}{', 2 kg' if payload else ''}", base.with_params(**changes))
-
-
-#: Joint friction the controller does not know, on Menagerie's contacts: damping
-#: [N m s/rad] x friction loss [N m] (every joint) x payload.
-JOINT_SWEEP = tuple(
-    _sweep_case(MENAGERIE, f"damping {d:g}, friction loss {f:g}", p, joint_damping=d,
-                joint_friction_loss=f)
-    for p in (False, True) for d in (0.0, 0.5, 1.0, 2.0, 3.0) for f in (0.0, 0.2, 0.4))
-#: The identified GO2's joints with more calf friction: calf friction loss [N m] x damping
-#: [N m s/rad] (every joint) x payload.
-CALF_SWEEP = tuple(
-    _sweep_case(Plant.preset("identified"), f"calf friction {c:g}, damping {d:g}", p,
-                calf_friction_loss=c, joint_damping=d)
-    for p in (False, True) for c in (0.2, 0.5, 1.0, 1.4) for d in (0.1, 0.3, 2.0))
-QUICK_JOINT_SWEEP = (JOINT_SWEEP[-1],)
-QUICK_CALF_SWEEP = (CALF_SWEEP[-1],)
-#: The sweeps' high five holds as long as the README's (2 s).
-SWEEP_HOLD_S = 2
-#: Plants on which the default controller is compared with one told their joint friction.
-COMPENSATION_CASES = (PlantCase("menagerie", MENAGERIE),
-                      PlantCase("identified, calf friction 1.4",
-                                Plant.preset("identified").with_params(calf_friction_loss=1.4)))
-
 
 @dataclass
-class Episode:
+class HighFiveOutcome:
     """What one high five did, measured tick by tick from the goal to the end of the run."""
 
     status: GoalStatus
@@ -234,7 +164,7 @@ def standing_on_four_feet(loop: ControlLoop) -> bool:
             and tilt_deg(q) < 5.0 and all(forces[leg][2] > LOADED_N for leg in LEGS))
 
 
-def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
+def make_loop(case: PlantCase = NOMINAL_CASE, *, seed: int = 0,
               controller: BalanceController | None = None,
               faults_from_s: float = SETTLE_S) -> ControlLoop:
     """A control loop on a fresh standing MuJoCo GO2 built with ``case``'s plant and sensors.
@@ -242,21 +172,18 @@ def make_loop(case: PlantCase = PlantCase(), *, seed: int = 0,
     ``seed`` seeds the sensors' noise and biases; the case's sensor faults start
     ``faults_from_s`` [s] later than their own times (a goal is sent at :data:`SETTLE_S`).
     """
-    period = case.control_period_s
-    return ControlLoop.simulated(
-        plant=case.plant, control_period_s=period,
-        controller=controller or WholeBodyController(control_period_s=period),
-        sensors=case.sensor_model(), sensor_seed=seed, state=case.state,
-        estimator=(make_estimator(case.estimator, control_period_s=period)
-                   if case.state == "estimate" else None),
-        command_delay_ticks=case.delay_ticks,
-        sensor_faults=[replace(f, at_s=f.at_s + faults_from_s) for f in case.sensor_faults])
+    episode = case.episode(height_m=HEIGHT_M, hold_s=HOLD_S, seed=seed)
+    shift = faults_from_s - SETTLE_S  # the case's episode starts its faults at SETTLE_S
+    faults = tuple(dataclasses.replace(f, at_s=f.at_s + shift) for f in episode.sensor_faults)
+    return build_loop(episode.replace(sensor_faults=faults), controller or WholeBodyController(
+        control_period_s=case.control_period_s))
 
 
-def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
+def run_high_five(case: PlantCase = NOMINAL_CASE, *, pushes: Sequence[Push] = (),
                   hold_s: int = HOLD_S, height_m: float = HEIGHT_M, seed: int = 0,
                   hooks: Sequence[TickHook] = (), after_s: float = AFTER_S,
-                  measure: bool = True, controller: BalanceController | None = None) -> Episode:
+                  measure: bool = True, controller: BalanceController | None = None
+                  ) -> HighFiveOutcome:
     """Stand ``SETTLE_S``, run one high five with ``pushes``, run on ``after_s``; measure it.
 
     Args:
@@ -270,35 +197,33 @@ def run_high_five(case: PlantCase = PlantCase(), *, pushes: Sequence[Push] = (),
             (tracking, sliding...; it costs about half the control's time).
         controller: The controller (a default :class:`WholeBodyController` when ``None``).
     """
-    loop = make_loop(case, seed=seed, controller=controller)
-    loop.spin_for(SETTLE_S)
-    start = loop.sim.time_s
-    phases: list[tuple[float, str]] = []
-    metrics = MetricsHook(loop, lambda: phases[-1][1] if phases else "") if measure else None
+    episode = case.episode(height_m=height_m, hold_s=hold_s, seed=seed, pushes=tuple(pushes),
+                           after_s=after_s, timeout_s=TIMEOUT_S)
+    return measured_high_five(episode, hooks=hooks, measure=measure, controller=controller)
+
+
+def measured_high_five(episode: Episode, *, hooks: Sequence[TickHook] = (),
+                       measure: bool = True, controller: BalanceController | None = None
+                       ) -> HighFiveOutcome:
+    """Run ``episode`` (a high five) and measure where the robot went, on the truth.
+
+    Raises:
+        WbcError: The goal ended without a result (rejected, or none within its timeout).
+    """
     extremes = _Extremes()
-    timed = [replace(push, at_s=start + push.at_s) for push in pushes]
-    loop.hooks += [PushSchedule(loop.sim, timed), extremes, *hooks]
-    if metrics is not None:
-        loop.hooks.append(metrics)
-
-    def on_feedback(message: Any) -> None:
-        phase = message.feedback.phase
-        if not phases or phases[-1][1] != phase:
-            phases.append((round(loop.context.now_s - start, 4), phase))
-
-    wall = time.perf_counter()
-    result = loop.client("high_five").send_goal_and_wait(
-        HighFiveGoal(target_height=height_m, hold_seconds=hold_s), timeout=TIMEOUT_S,
-        feedback_callback=on_feedback)
-    loop.spin_for(after_s)
-    summary = None if metrics is None else metrics.metrics.summary(time.perf_counter() - wall)
+    result = EpisodeRunner(episode, controller=controller, hooks=[extremes, *hooks],
+                           metrics=measure).run()
+    if result.wrapped is None:
+        raise WbcError(f"the high five ended without a result ({result.status}): "
+                       f"{result.message}")
+    loop, start = result.loop, result.sent_s
     final, _ = loop.true_state()
-    return Episode(
-        status=result.status, message=result.result.message,
+    return HighFiveOutcome(
+        status=result.wrapped.status, message=result.message,
         min_height_m=extremes.min_height_m, final_height_m=float(final[2]),
         max_tilt_deg=extremes.max_tilt_deg, final_tilt_deg=tilt_deg(final),
-        standing=standing_on_four_feet(loop), summary=summary, start_s=start, phases=phases,
-        loop=loop)
+        standing=standing_on_four_feet(loop), summary=result.metrics, start_s=start,
+        phases=[(round(t_s - start, 4), phase) for t_s, phase in result.phases()], loop=loop)
 
 
 def hold_push(direction_deg: float, impulse_ns: float, *, body: str = "base",
@@ -308,10 +233,11 @@ def hold_push(direction_deg: float, impulse_ns: float, *, body: str = "base",
                 duration_s=duration_s, direction_deg=direction_deg, body=body)
 
 
-def run_episode(case: PlantCase = PlantCase(), *, push: Push | None = None,
+def run_episode(case: PlantCase = NOMINAL_CASE, *, push: Push | None = None,
                 hold_s: int = HOLD_S, height_m: float = HEIGHT_M, seed: int = 0,
                 measure: bool = True, gains: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """One high five as a JSON-ready row (:meth:`Episode.row`): what every table and sweep runs.
+    """One high five as a JSON-ready row (:meth:`HighFiveOutcome.row`): what every table and
+    sweep runs.
 
     Args:
         case: The plant, sensor noise, delay and control period.
@@ -322,12 +248,21 @@ def run_episode(case: PlantCase = PlantCase(), *, push: Push | None = None,
         gains: :class:`wbc.ControllerConfig` fields for the controller (checked there); the
             default controller when empty.
     """
+    episode = high_five_episode(case, push=push, hold_s=hold_s, height_m=height_m, seed=seed,
+                                gains=gains)
     controller = None
     if gains:
         controller = WholeBodyController(control_period_s=case.control_period_s, **gains)
-    episode = run_high_five(case, pushes=() if push is None else (push,), hold_s=hold_s,
-                            height_m=height_m, seed=seed, measure=measure, controller=controller)
-    return episode.row()
+    return measured_high_five(episode, measure=measure, controller=controller).row()
+
+
+def high_five_episode(case: PlantCase = NOMINAL_CASE, *, push: Push | None = None,
+                      hold_s: int = HOLD_S, height_m: float = HEIGHT_M, seed: int = 0,
+                      gains: Mapping[str, Any] | None = None) -> Episode:
+    """The episode :func:`run_episode` runs (its goal, push, settle, run-on and timeout)."""
+    return case.episode(height_m=height_m, hold_s=hold_s, seed=seed,
+                        pushes=() if push is None else (push,), gains=dict(gains or {}),
+                        after_s=AFTER_S, timeout_s=TIMEOUT_S)
 
 
 # ---------------------------------------------------------------------------- the tables
@@ -427,82 +362,6 @@ def sweep_row(case: PlantCase) -> dict[str, Any]:
     """One sweep episode (a 0.40 m high five held :data:`SWEEP_HOLD_S`), as a report row."""
     return {"name": case.name, "plant": dataclasses.asdict(case.plant),
             **run_episode(case, hold_s=SWEEP_HOLD_S)}
-
-
-def _yes(flag: bool) -> str:
-    return "yes" if flag else "no"
-
-
-def push_grid_lines(directions: Sequence[str], impulses: Sequence[str],
-                    cell: Callable[[str, str], str]) -> list[str]:
-    """The push grid as text: a row per impulse, a column per direction, each cell
-    ``cell(impulse, direction)`` (columns at least 4 characters wide)."""
-    width = max(4, *(len(cell(i, d)) for i in impulses for d in directions)) + 1
-    lines = ["impulse [N s] | direction [deg]",
-             "              |" + "".join(f"{d:>{width}}" for d in directions)]
-    for impulse in impulses:
-        lines.append(f"{impulse:>13} |" + "".join(
-            f"{cell(impulse, d):>{width}}" for d in directions))
-    return lines
-
-
-def format_report(report: dict[str, Any]) -> str:
-    """The two tables as text."""
-    grid = report["push_grid"]
-    title = (f"Pushes on the base during the hold ({grid['duration_s']:g} s, starting "
-             f"{grid['starts_into_hold_s']:g} s into a {report['goal']['hold_s']} s hold of a "
-             f"{report['goal']['target_height_m']:.2f} m high five)")
-    outcome = {(f"{c['impulse_ns']:g}", str(c["direction_deg"])): c["outcome"]
-               for c in grid["cells"]}
-    lines = [(f"State: estimated ({DEFAULT_ESTIMATOR}) from the {DEFAULT_SENSORS} sensors unless "
-              "a row says otherwise; everything measured on the simulator's truth"), "",
-             title, "S succeeded, A aborted (foot put down, robot up), F fell", "",
-             *push_grid_lines([str(d) for d in grid["directions_deg"]],
-                              [f"{i:g}" for i in grid["impulses_ns"]],
-                              lambda impulse, direction: outcome[impulse, direction])]
-    total = len(grid["cells"])
-    lines += ["", f"succeeded {grid['succeeded']}/{total} ({100 * grid['success_rate']:.0f} %), "
-              f"aborted {grid['aborted']}, fell {grid['fell']}; any fall: "
-              f"{_yes(grid['any_fall'])}" + "".join(
-                  f"; fell at {c['impulse_ns']:g} N s toward {c['direction_deg']} deg"
-                  for c in grid["cells"] if c["outcome"] == "F"), "",
-              "Plant changes (no push)", ""]
-    header = (f"{'plant change':<66} {'result':<9} {'track RMS':>9} {'hold RMS':>8} "
-              f"{'sliding':>7} {'min z':>5} {'tilt':>5} {'end tilt':>8} {'QP fail':>7} "
-              f"{'standing':>8} {'fell':>4}")
-    units = (f"{'':<66} {'':<9} {'[mm]':>9} {'[mm]':>8} {'[mm]':>7} {'[m]':>5} {'[deg]':>5} "
-             f"{'[deg]':>8}")
-    lines += [header, units]
-    for row in report["plant_changes"]:
-        lines.append(f"{row['name']:<66} {row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
-                     f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
-                     f"{row['min_height_m']:>5.3f} {row['max_tilt_deg']:>5.1f} "
-                     f"{row['final_tilt_deg']:>8.1f} {row['qp_failures']:>7} "
-                     f"{_yes(row['standing']):>8} {_yes(row['fell']):>4}")
-    for key, title in (("joint_sweep", "Joint friction sweep (Menagerie contacts)"),
-                       ("calf_sweep", "Calf friction sweep (identified joints)")):
-        sweep = report[key]
-        lines += ["", f"{title}, {SWEEP_HOLD_S} s hold, {sweep['wall_s']:g} s wall", "",
-                  (f"{'plant':<40} {'result':<9} {'track RMS':>9} {'hold RMS':>8} "
-                   f"{'sliding':>7} {'tilt':>5} {'end tilt':>8} {'QP fail':>7}")]
-        for row in sweep["rows"]:
-            lines.append(f"{row['name']:<40} {row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
-                         f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
-                         f"{row['max_tilt_deg']:>5.2f} {row['final_tilt_deg']:>8.2f} "
-                         f"{row['qp_failures']:>7}")
-        lines.append(f"succeeded {sweep['succeeded']}/{len(sweep['rows'])}, max tilt "
-                     f"{sweep['max_tilt_deg']:.2f} deg, worst end tilt "
-                     f"{sweep['max_final_tilt_deg']:.2f} deg")
-    if "compensation" in report:
-        lines += ["", "Known joint friction fed forward (known_joint_damping/_friction)", "",
-                  (f"{'plant':<32} {'friction':<8} {'result':<9} {'track RMS':>9} "
-                   f"{'hold RMS':>8} {'sliding':>7} {'tilt':>5} {'end tilt':>8}")]
-        for row in report["compensation"]["rows"]:
-            lines.append(f"{row['name']:<32} {'known' if row['known_friction'] else 'unknown':<8} "
-                         f"{row['status']:<9} {row['tracking_rms_mm']:>9.2f} "
-                         f"{row['holding_rms_mm']:>8.2f} {row['stance_sliding_max_mm']:>7.2f} "
-                         f"{row['max_tilt_deg']:>5.2f} {row['final_tilt_deg']:>8.2f}")
-    return "\n".join(lines)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

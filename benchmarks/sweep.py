@@ -41,12 +41,11 @@ from benchmarks.sweep_spec import (
     IMPULSES,
     EpisodeSpec,
     SweepSpec,
-    cli_values,
     value_text,
 )
-from sim.sensors import DEFAULT_SENSORS
+from benchmarks.sweep_values import cli_values
+from sim.episode import episode_default
 from wbc.core.errors import ConfigurationError
-from wbc.estimation.estimators import DEFAULT_ESTIMATOR
 
 #: Exit statuses: done; an episode raised (its record says what; run again to retry);
 #: usage error; interrupted (run again to resume).
@@ -288,9 +287,10 @@ def state_line(spec: SweepSpec) -> str:
         axis = spec.axis(path)
         return default if axis is None else ", ".join(value_text(v) for v in axis.values)
 
-    return (f"state: {values('sensors.state', 'estimate')} ({DEFAULT_ESTIMATOR} when "
-            f"estimated), sensors {values('sensors.preset', DEFAULT_SENSORS)}; measured on "
-            "the simulator's truth")
+    return (f"state: {values('sensors.state', episode_default('state'))} "
+            f"({episode_default('estimator')} when estimated), sensors "
+            f"{values('sensors.preset', episode_default('sensors'))}; measured on the "
+            "simulator's truth")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

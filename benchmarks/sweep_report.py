@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from benchmarks.robustness import push_grid_lines
+from benchmarks.robustness_report import push_grid_lines
 from benchmarks.sweep_spec import DIRECTIONS, IMPULSES, EpisodeSpec, SweepSpec, value_text
 
 #: Outcomes from worst to best: E the episode raised, F fell, A aborted with the robot up,

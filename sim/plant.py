@@ -1,4 +1,4 @@
-"""The simulated GO2's physics that the controller's model does not know: joint friction, contacts, payload.
+"""The simulated GO2's physics the controller does not model: joint friction, contacts, payload.
 
 A :class:`Plant` is applied to the MuJoCo scene only; the controller always uses the URDF
 with frictionless joints. Named presets (:data:`PLANT_PRESETS`):
@@ -92,8 +92,8 @@ class Plant:
     def __post_init__(self) -> None:
         for joint_type in JOINT_TYPES:
             if not isinstance(getattr(self, joint_type), JointPhysics):
-                raise ConfigurationError(
-                    f"{joint_type}: expected a JointPhysics, received {getattr(self, joint_type)!r}")
+                raise ConfigurationError(f"{joint_type}: expected a JointPhysics, received "
+                                         f"{getattr(self, joint_type)!r}")
         as_float("foot_friction", self.foot_friction, low=0.05, high=5.0)
         as_float("torsional_friction", self.torsional_friction, low=0.0, high=1.0)
         as_float("rolling_friction", self.rolling_friction, low=0.0, high=1.0)

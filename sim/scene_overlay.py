@@ -1,4 +1,4 @@
-"""What the controller is doing, drawn into a MuJoCo scene: CoM, support polygon, forces, foot target."""
+"""What the controller is doing, drawn into a MuJoCo scene: CoM, support polygon, forces, target."""
 
 from __future__ import annotations
 
@@ -9,6 +9,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sim.scene_geoms import (
+    FLOOR_Z,
+    ZERO3,
+    add_geom,
+    connect,
+    init_geom,
+    next_geom,
+    on_floor,
+    triangle,
+)
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.model.description import FOOT_RADIUS_M, LEGS
@@ -49,8 +59,6 @@ LEGEND: dict[str, tuple[tuple[str, tuple[float, ...], str], ...]] = {
 #: Arrow length per newton [m/N]: a GO2 standing on four feet (about 38 N each) gets 15 cm
 #: arrows, on three about 20 cm.
 FORCE_SCALE_M_PER_N = 0.004
-#: Height [m] of the floor drawings above the floor, enough to win the depth test.
-_FLOOR_Z = 0.003
 #: Trace points closer than this [m] to the last one are skipped.
 _TRACE_STEP_M = 0.005
 #: Most points a trace keeps (the oldest are dropped).
@@ -58,9 +66,6 @@ _TRACE_POINTS = 400
 #: The share of an arrow geom's ``size[2]`` MuJoCo 4.0's renderer draws: the shaft and head
 #: span half of it (``tests/test_scene_overlay.py`` checks the drawn length in pixels).
 ARROW_DRAWN_FRACTION = 0.5
-_IDENTITY = np.eye(3).reshape(9)
-_ZERO3 = np.zeros(3)
-
 
 def parse_overlays(text: str) -> tuple[str, ...]:
     """Overlay names from a comma-separated list, ``all`` or ``none`` (the CLI's syntax).
@@ -183,11 +188,11 @@ class SceneOverlay:
     def _draw_com(self, scene: mujoco.MjvScene, com: np.ndarray) -> None:
         import mujoco
 
-        ground = np.array([com[0], com[1], _FLOOR_Z])
-        _add(scene, mujoco.mjtGeom.mjGEOM_SPHERE, COM_RGBA, size=(0.025, 0, 0), pos=com)
-        _add(scene, mujoco.mjtGeom.mjGEOM_CYLINDER, COM_RGBA, size=(0.022, 0.001, 0),
+        ground = np.array([com[0], com[1], FLOOR_Z])
+        add_geom(scene, mujoco.mjtGeom.mjGEOM_SPHERE, COM_RGBA, size=(0.025, 0, 0), pos=com)
+        add_geom(scene, mujoco.mjtGeom.mjGEOM_CYLINDER, COM_RGBA, size=(0.022, 0.001, 0),
              pos=ground)
-        _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, COM_RGBA, 0.003, com, ground)
+        connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, COM_RGBA, 0.003, com, ground)
 
     def _draw_polygon(self, scene: mujoco.MjvScene, loop: ControlLoop) -> None:
         import mujoco
@@ -198,17 +203,17 @@ class SceneOverlay:
             return
         corners = SupportPolygon.ordered(np.array([controller.foot_position(leg)
                                                    for leg in legs]))
-        ring = _on_floor(corners)
+        ring = on_floor(corners)
         centre = ring.mean(axis=0)
         for a, b in zip(ring, np.roll(ring, -1, axis=0)):
-            _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, POLYGON_RGBA, 0.006, a, b)
-            _triangle(scene, POLYGON_FILL_RGBA, centre, a, b)
+            connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, POLYGON_RGBA, 0.006, a, b)
+            triangle(scene, POLYGON_FILL_RGBA, centre, a, b)
         margin = float(getattr(getattr(controller, "config", None), "support_margin_m", 0.0))
         inner = SupportPolygon(margin_m=margin).inset(corners)
         if inner is not None:
-            inner_ring = _on_floor(inner, z=_FLOOR_Z + 0.001)
+            inner_ring = on_floor(inner, z=FLOOR_Z + 0.001)
             for a, b in zip(inner_ring, np.roll(inner_ring, -1, axis=0)):
-                _connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, MARGIN_RGBA, 0.003, a, b)
+                connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, MARGIN_RGBA, 0.003, a, b)
 
     def _draw_forces(self, scene: mujoco.MjvScene, loop: ControlLoop, forces: np.ndarray,
                      rgba: Sequence[float], *, width: float, offset_m: float) -> None:
@@ -225,7 +230,7 @@ class SceneOverlay:
             if offset_m:  # beside the commanded arrow, away from the body
                 out = start[:2] - com[:2]
                 start[:2] += offset_m * out / max(float(np.hypot(*out)), 1e-9)
-            _connect(scene, mujoco.mjtGeom.mjGEOM_ARROW, rgba, width, start,
+            connect(scene, mujoco.mjtGeom.mjGEOM_ARROW, rgba, width, start,
                      start + self.force_scale_m_per_n / ARROW_DRAWN_FRACTION * force)
 
     def _draw_target(self, scene: mujoco.MjvScene, leg: str, target: np.ndarray | None) -> None:
@@ -234,11 +239,11 @@ class SceneOverlay:
         if target is None:
             return
         # Larger than the foot, which covers it while tracking well: a halo around the foot.
-        _add(scene, mujoco.mjtGeom.mjGEOM_SPHERE, TARGET_RGBA,
+        add_geom(scene, mujoco.mjtGeom.mjGEOM_SPHERE, TARGET_RGBA,
              size=(1.5 * FOOT_RADIUS_M, 0, 0), pos=target)
         trace = self.traces[leg]
         for a, b in itertools.pairwise(trace):
-            _connect(scene, mujoco.mjtGeom.mjGEOM_LINE, TRACE_RGBA, 3.0, a, b)
+            connect(scene, mujoco.mjtGeom.mjGEOM_LINE, TRACE_RGBA, 3.0, a, b)
 
     def _record_traces(self, controller: object, swing: list[str]) -> None:
         for leg in swing:
@@ -297,7 +302,7 @@ class SceneOverlay:
         """
         import mujoco
 
-        geom = _slot(scene)
+        geom = next_geom(scene)
         if geom is None:
             return
         camera = scene.camera[0]
@@ -313,7 +318,7 @@ class SceneOverlay:
         y = camera.frustum_top - 0.25 * half_height
         depth = 0.6
         pos = head + depth * forward + depth / near * (x * right + y * up)
-        _init(geom, mujoco.mjtGeom.mjGEOM_LABEL, (1.0, 1.0, 1.0, 1.0), _ZERO3, pos)
+        init_geom(geom, mujoco.mjtGeom.mjGEOM_LABEL, (1.0, 1.0, 1.0, 1.0), ZERO3, pos)
         geom.label = self.caption(loop)
 
     def status_lines(self, loop: ControlLoop) -> tuple[str, str]:
@@ -333,71 +338,3 @@ class SceneOverlay:
             rows.append(("normal force", "  ".join(
                 f"{leg} {out.forces[i, 2]:.0f}" for i, leg in enumerate(LEGS)) + " N"))
         return "\n".join(r[0] for r in rows), "\n".join(r[1] for r in rows)
-
-
-# ---------------------------------------------------------------------- geometry
-
-
-def _on_floor(points: np.ndarray, z: float = _FLOOR_Z) -> np.ndarray:
-    ring = np.empty((len(points), 3))
-    ring[:, :2] = points[:, :2]
-    ring[:, 2] = z
-    return ring
-
-
-def _slot(scene: mujoco.MjvScene) -> mujoco.MjvGeom | None:
-    if scene.ngeom >= scene.maxgeom:
-        return None
-    geom = scene.geoms[scene.ngeom]
-    scene.ngeom += 1
-    return geom
-
-
-def _init(geom: mujoco.MjvGeom, kind: int, rgba: Sequence[float], size: Sequence[float],
-          pos: np.ndarray, mat: np.ndarray = _IDENTITY) -> None:
-    import mujoco
-
-    mujoco.mjv_initGeom(geom, kind, np.asarray(size, dtype=float), np.asarray(pos, dtype=float),
-                        mat, np.asarray(rgba, dtype=np.float32))
-    geom.category = mujoco.mjtCatBit.mjCAT_DECOR
-    geom.castshadow = False
-    geom.emission = 0.35  # keeps the hue under the lights, for people and for tests
-
-
-def _add(scene: mujoco.MjvScene, kind: int, rgba: Sequence[float], *, size: Sequence[float],
-         pos: np.ndarray) -> None:
-    geom = _slot(scene)
-    if geom is not None:
-        _init(geom, kind, rgba, size, pos)
-
-
-def _connect(scene: mujoco.MjvScene, kind: int, rgba: Sequence[float], width: float,
-             start: np.ndarray, end: np.ndarray) -> None:
-    import mujoco
-
-    geom = _slot(scene)
-    if geom is not None:
-        _init(geom, kind, rgba, _ZERO3, _ZERO3)
-        mujoco.mjv_connector(geom, kind, width, np.asarray(start, dtype=float),
-                             np.asarray(end, dtype=float))
-
-
-def _triangle(scene: mujoco.MjvScene, rgba: Sequence[float], a: np.ndarray, b: np.ndarray,
-              c: np.ndarray) -> None:
-    """A filled triangle: MuJoCo's triangle spans (0, 0, 0), (size0, 0, 0), (0, size1, 0) of
-    its frame, so a frame whose axes are the two edges (and the normal) maps it onto a b c."""
-    import mujoco
-
-    geom = _slot(scene)
-    if geom is None:
-        return
-    u, v = b - a, c - a
-    normal = np.cross(u, v)
-    length = float(np.linalg.norm(normal))
-    if length < 1e-12:
-        scene.ngeom -= 1
-        return
-    if normal[2] < 0:  # face up, towards the light
-        u, v, normal = v, u, -normal
-    mat = np.column_stack([u, v, normal / length]).reshape(9)
-    _init(geom, mujoco.mjtGeom.mjGEOM_TRIANGLE, rgba, (1.0, 1.0, 1.0), a, mat)

@@ -9,8 +9,8 @@ import itertools
 import pytest
 import yaml
 
-from actions.action_type import ACTION_TYPES, HIGH_FIVE
 from actions.go2.go2_actions import GO2_ACTIONS
+from actions.go2.go2_interfaces import ACTION_TYPES, HIGH_FIVE
 from actions.go2.high_five_behaviour import INVALID_TARGET_HEIGHT
 from sim.cli import EXIT_CODES_HELP, EXIT_REJECTED, EXIT_SUCCEEDED, EXIT_USAGE, main
 from sim.control_loop import ControlLoop

@@ -30,7 +30,7 @@ from sim.cli import (
     build_parser,
     main,
 )
-from sim.cli_trajectory_file import load_trajectory_goal
+from sim.cli.trajectory_file import load_trajectory_goal
 from sim.plant import Plant
 from sim.sensor_faults import FAULT_KINDS
 from wbc.model.description import JOINT_NAMES, LEGS
@@ -278,8 +278,8 @@ def test_a_trajectory_with_an_unknown_joint_is_rejected_by_the_server(tmp_path):
     path.write_text(WAVE_YAML.replace("FR_hip_joint", "FR_elbow_joint"))
     code, out = run(["trajectory", str(path)])
     assert code == EXIT_REJECTED
-    assert "goal rejected (code -2): trajectory.joint_names[0]: unknown joint " \
-           "'FR_elbow_joint'; valid joints: FL_hip_joint" in out
+    assert ("goal rejected (code -2): trajectory.joint_names[0]: unknown joint "
+            "'FR_elbow_joint'; valid joints: FL_hip_joint") in out
 
 
 # ----------------------------------------------------------------------------- trajectories
@@ -399,7 +399,8 @@ def test_every_option_says_its_default(capsys):
     assert exc.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
     for phrase in ("--height M foot height above the ground [m], in [0.10, 0.50] (default: 0.40)",
-                   "--hold S seconds to hold the foot up [s], a whole number in [0, 60] (default: 2)",
+                   ("--hold S seconds to hold the foot up [s], a whole number in [0, 60] "
+                    "(default: 2)"),
                    "--fps N video frame rate [1/s] of simulated time (default: 30)",
                    "--video-size WxH video frame size in pixels (default: 640x480)",
                    "3 the action server rejected the goal"):
@@ -411,7 +412,7 @@ def test_every_option_says_its_default(capsys):
                 assert "default" in action.help, (name, action.option_strings)
 
 
-# ----------------------------------------------------------------------------- the installed command
+# ------------------------------------------------------------------------ the installed command
 
 
 def test_installed_command_records_a_video_of_the_right_size(tmp_path):
@@ -530,8 +531,8 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
      "--sensor-fault: unknown leg 'XL'; valid legs: FL, FR, RL, RR"),
     (["--estimator", "ukf"], "--estimator: invalid choice: 'ukf' (choose from 'inekf', 'kf')"),
     (["--estimator-param", "trust=1"],
-     "--estimator-param: unknown estimator parameter(s) ['trust']; valid parameters: "
-     "quaternion_tolerance, "),
+     ("--estimator-param: unknown estimator parameter(s) ['trust']; valid parameters: "
+      "quaternion_tolerance, ")),
     (["--estimator-param", "trust_timeout_s=-1"],
      "--estimator-param: trust_timeout_s: expected a value in [0, 10], received -1"),
     (["--command-delay", "0.0025"],

@@ -100,8 +100,8 @@ def test_control_period_in_physics_steps(period, timestep, steps):
 
 
 @pytest.mark.parametrize(("period", "message"), [
-    (1.5e-3, r"control_period_s: expected a whole number of physics steps of 0.001 s "
-             r"\(e.g. 0.001, 0.002, 0.004 s\), received 0.0015 s"),
+    (1.5e-3, (r"control_period_s: expected a whole number of physics steps of 0.001 s "
+              r"\(e.g. 0.001, 0.002, 0.004 s\), received 0.0015 s")),
     (0.0, r"control_period_s: expected a value in \(0, 0.1\], received 0"),
     (5e-4, r"control_period_s: expected a whole number of physics steps of 0.001 s"),
 ])

@@ -9,9 +9,8 @@ around the integrated plan) must meet on them.
 
 import pytest
 
-from actions import GoalStatus
+from actions import GoalStatus, SitGoal, StandGoal
 from actions.go2.robot_context import STANDING_HEIGHT_M, tilt_deg
-from actions.messages import SitGoal, StandGoal
 from benchmarks.robustness import PlantCase, run_high_five
 from sim.control_loop import ControlLoop
 from sim.plant import Plant

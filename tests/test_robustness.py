@@ -8,17 +8,16 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from actions import GoalStatus, HighFiveGoal
+from actions import GoalStatus, HighFiveGoal, StandGoal
 from actions.action_runner import ActionRunner
 from actions.go2.robot_context import tilt_deg
-from actions.messages import StandGoal
 from benchmarks import robustness
 from benchmarks.robustness import (
     DIRECTIONS_DEG,
     HOLD_START_S,
     PLANT_CASES,
     PUSH_INTO_HOLD_S,
-    Episode,
+    HighFiveOutcome,
     PlantCase,
     hold_push,
     make_loop,
@@ -47,7 +46,7 @@ def assert_one_result_per_accepted_goal(runner: ActionRunner) -> None:
     assert ends == Counter(accepted), (accepted, ends)
 
 
-def phase_window(episode: Episode, phase: str) -> tuple[float, float]:
+def phase_window(episode: HighFiveOutcome, phase: str) -> tuple[float, float]:
     """Sim times [s] (since the goal) a feedback phase began and the next one began."""
     times = [t for t, _ in episode.phases] + [np.inf]
     names = [p for _, p in episode.phases]
@@ -66,7 +65,7 @@ class FrWatch:
                           loop.sim.foot_positions()["FR"],
                           np.array(loop.controller.foot_tasks["FR"].target)))
 
-    def between(self, episode: Episode, t0: float, t1: float):
+    def between(self, episode: HighFiveOutcome, t0: float, t1: float):
         """The rows from ``t0`` to ``t1`` [s] after the goal."""
         return [r for r in self.rows if t0 <= r[0] - episode.start_s < t1]
 

@@ -223,7 +223,7 @@ def test_every_overlay_is_in_the_rendered_frame(raising, frames):
     # MuJoCo's measured forces: blue arrows beside the commanded ones, away from the body.
     blue = hue_mask(frame, MEASURED_RGBA, min_saturation=0.6)
     measured = loop.sim.foot_contact_force_array()
-    for i, leg in enumerate(("FL", "RL", "RR")):
+    for leg in ("FL", "RL", "RR"):
         row = LEGS.index(leg)
         out = feet[leg][:2] - com[:2]
         start = feet[leg] - [0.0, 0.0, FOOT_RADIUS_M]

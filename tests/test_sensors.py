@@ -178,7 +178,7 @@ def test_the_imu_starts_settled_on_its_biased_accelerometer():
     sensors = SimulatedSensors(sim, "go2", seed=2)
     record = SensorRecord.zeros()
     sensors.sample(record)
-    w, x, y, _ = record.imu_quaternion_wxyz
+    _, x, y, _ = record.imu_quaternion_wxyz
     bias = sensors.accel_bias
     assert math.degrees(2 * x) == pytest.approx(math.degrees(bias[1] / 9.81), abs=2e-3)
     assert math.degrees(2 * y) == pytest.approx(-math.degrees(bias[0] / 9.81), abs=2e-3)

@@ -98,7 +98,8 @@ def test_push_moves_the_base_only_while_applied(description):
 
 
 def test_bad_input(sim):
-    with pytest.raises(ConfigurationError, match=r"tau: expected an array of shape \(12,\), received shape \(3,\)"):
+    with pytest.raises(ConfigurationError,
+                       match=r"tau: expected an array of shape \(12,\), received shape \(3,\)"):
         sim.step(np.zeros(3))
     with pytest.raises(UnknownNameError, match="unknown body 'torso'; valid bodys: base"):
         sim.apply_force([1, 0, 0], 0.1, body="torso")
@@ -140,7 +141,8 @@ def test_a_bad_motor_command_is_refused_whole(sim):
     before = sim.time_s
     command = MotorCommand.pure_torque(np.zeros(12))
     command.kp[2] = -5.0
-    with pytest.raises(ConfigurationError, match=r"motor command: kp: negative gain at joints \[2\]"):
+    with pytest.raises(ConfigurationError,
+                       match=r"motor command: kp: negative gain at joints \[2\]"):
         sim.step_command(command)
     assert sim.time_s == before
 

@@ -13,10 +13,10 @@ from benchmarks.sweep_spec import (
     IMPULSES,
     SweepSpec,
     SweepSpecError,
-    cli_values,
     parse_values,
     read_yaml,
 )
+from benchmarks.sweep_values import cli_values
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "benchmarks" / "sweeps"
 

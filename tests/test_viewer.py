@@ -12,7 +12,7 @@ from collections.abc import Callable
 import mujoco
 import pytest
 
-from sim import cli
+from sim import episode_runner
 from sim.cli import EXIT_SUCCEEDED, main
 from sim.control_loop import ControlLoop
 from sim.scene_overlay import DEFAULT_OVERLAYS, SceneOverlay
@@ -193,8 +193,8 @@ class ViewerRun:
             if seconds == 0.1:  # the hold's poll (the pacing's never is exactly)
                 self.handle.hold_polls += 1
 
-        monkeypatch.setattr(cli, "window_problem", lambda: "")
-        monkeypatch.setattr(cli, "ViewerHook", make_hook)
+        monkeypatch.setattr(episode_runner, "window_problem", lambda: "")
+        monkeypatch.setattr(episode_runner, "ViewerHook", make_hook)
         monkeypatch.setattr(time, "sleep", sleep)
 
     def __call__(self, *options: str) -> tuple[int, list[str]]:

@@ -7,14 +7,33 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from actions.messages import (
-    Duration,
-    FollowJointTrajectoryGoal,
-    JointTolerance,
-    JointTrajectory,
-    JointTrajectoryPoint,
-)
+from actions.messages import Duration
+from actions.ros_interfaces.control_msgs import FollowJointTrajectoryGoal, JointTolerance
+from actions.ros_interfaces.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
 from wbc.core.errors import ConfigurationError
+
+#: The file format, as ``go2-wbc trajectory --help`` shows it.
+TRAJECTORY_FORMAT_HELP = """\
+trajectory file (YAML, or JSON with a .json suffix; same keys):
+  joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]   # joints of one leg
+  points:                              # in time order
+    - positions: [-0.1, -0.3, -1.6]    # [rad], one per joint name: foot up, in front
+      velocities: [0.0, 0.0, 0.0]      # optional [rad/s]; in every point or in none
+      accelerations: [0.0, 0.0, 0.0]   # optional [rad/s^2]; in every point or in none
+      time_from_start: 2.0             # [s] from the moment the leg is free
+  path_tolerance:                      # optional, per joint, during the motion
+    - {name: FR_thigh_joint, position: 0.2}        # [rad]; 0 = server default, -1 = none
+  goal_tolerance:                      # optional, per joint, at the end
+    - {name: FR_thigh_joint, position: 0.02, velocity: 0.1}   # [rad], [rad/s]
+  goal_time_tolerance: 0.5             # optional [s] after the last point
+A file that cannot be read or does not have this shape is a usage error (exit 2);
+joint names, lengths and times are judged by the action server (a rejection is exit 3).
+The progress is the trajectory time reached: 'starting' while the leg is released (the body
+shifts, the foot unloads), 'following', then 'settling' past the last point's time. The goal
+ends with the foot up, the leg holding where it stopped, the robot on three feet; a Stand
+goal puts the foot down.
+
+"""
 
 _GOAL_KEYS = ("joint_names", "points", "path_tolerance", "goal_tolerance", "goal_time_tolerance")
 _POINT_KEYS = ("positions", "velocities", "accelerations", "effort", "time_from_start")

@@ -18,32 +18,22 @@ from typing import IO, TYPE_CHECKING, Any
 
 import yaml
 
-from actions.action_client import ActionClient
-from actions.action_type import ACTION_TYPES, ActionType, action_type_named
+from actions.action_type import ActionType, action_type_named
 from actions.go2.go2_actions import GO2_ACTIONS
-from actions.goal_status import GoalStatus
+from actions.go2.go2_interfaces import ACTION_TYPES
 from actions.message_fields import set_message_fields
 from actions.responses import FeedbackMessage
-from sim.cli import (
-    EXIT_CODES_HELP,
-    EXIT_INTERRUPTED,
-    EXIT_NOT_SUCCEEDED,
-    EXIT_REJECTED,
-    EXIT_SUCCEEDED,
-    EXIT_UNAVAILABLE,
-    GOAL_SLACK_S,
-    SETTLE_S,
-    _plant_line,
-    _plant_options,
-    _state_options,
-    simulated_loop,
-    startup_objects_frozen,
-    state_line,
-)
+from sim.cli.episode_options import goal_episode
+from sim.cli.exit_codes import EXIT_CODES_HELP, EXIT_SUCCEEDED, exit_code
+from sim.cli.options import add_plant_options, add_state_options
+from sim.cli.output import plant_line, state_line
+from sim.episode_result import UNAVAILABLE, EpisodeListener, EpisodeResult
+from sim.episode_runner import EpisodeRunner, startup_objects_frozen
 from wbc.core.errors import WbcError
 
 if TYPE_CHECKING:
-    from sim.control_loop import ControlLoop
+    from actions.client_goal_handle import ClientGoalHandle
+    from sim.episode_result import EpisodeEvent, FeedbackSample
 
 #: Significant digits of the numbers in a feedback line.
 FEEDBACK_DIGITS = 6
@@ -90,7 +80,7 @@ def _action_type(text: str) -> ActionType:
     """An argparse type: an action type, in any form ``ros2 action send_goal`` takes
     (``go2_interfaces/action/HighFive``, ``go2_interfaces/HighFive``, ``HighFive``)."""
     try:
-        return action_type_named(text)
+        return action_type_named(text, ACTION_TYPES.values())
     except WbcError as err:
         raise argparse.ArgumentTypeError(str(err)) from None
 
@@ -103,7 +93,7 @@ def _action_or_interface(text: str) -> ActionType:
     if name in GO2_ACTIONS:
         return GO2_ACTIONS[name]
     try:
-        return action_type_named(text)
+        return action_type_named(text, ACTION_TYPES.values())
     except WbcError:
         pass
     interfaces = ", ".join(sorted(t.type_name for t in ACTION_TYPES.values()))
@@ -117,7 +107,7 @@ def _goal_mapping(text: str) -> dict[Any, Any]:
     example = '"{name: value, ...}" with the goal\'s fields (go2-wbc interface ACTION)'
     if "{" not in text and ":" not in text:
         try:  # the type given as the last argument: the goal itself is missing
-            type_name = action_type_named(text.strip()).type_name
+            type_name = action_type_named(text.strip(), ACTION_TYPES.values()).type_name
         except WbcError:
             pass
         else:
@@ -186,8 +176,8 @@ def add_action_commands(sub: Any) -> None:
                       help="cancel the goal if it has not ended after this many seconds of "
                            f"simulated time (default: {DEFAULT_TIMEOUT_S:g})")
     simulation = send.add_argument_group("simulation")
-    _plant_options(simulation)
-    _state_options(simulation)
+    add_plant_options(simulation)
+    add_state_options(simulation)
     send.set_defaults(run=_send_goal, parser=send)
 
     listing = sub.add_parser(
@@ -231,25 +221,23 @@ def _send_goal(args: argparse.Namespace) -> int:
         goal = set_message_fields(action_type.Goal(), args.goal).validated_copy()
     except WbcError as err:
         args.parser.error(f"GOAL: {err}")
-    return SendGoal(args, name, action_type, goal).run()
+    return SendGoal(args, name, goal).run()
 
 
-class SendGoal:
+class SendGoal(EpisodeListener):
     """Sends one goal to a fresh simulated GO2 and prints what ``ros2 action send_goal`` does.
 
     Args:
-        args: The parsed options (plant, rates, ``feedback``, ``timeout``).
+        args: The parsed options (the episode, ``feedback``, ``timeout``).
         action_name: The action to send the goal to.
-        action_type: Its interface.
         goal: The goal, already validated.
         stream: Where to print (standard output by default).
     """
 
-    def __init__(self, args: argparse.Namespace, action_name: str, action_type: ActionType,
-                 goal: Any, *, stream: IO[str] | None = None):
+    def __init__(self, args: argparse.Namespace, action_name: str, goal: Any, *,
+                 stream: IO[str] | None = None):
         self.args = args
         self.action_name = action_name
-        self.action_type = action_type
         self.goal = goal
         self.stream = stream or sys.stdout
 
@@ -261,79 +249,49 @@ class SendGoal:
     def run(self) -> int:
         """Run the goal to its end; return the exit code."""
         args = self.args
-        self.say(state_line(args))
-        self.say(_plant_line(args))
-        loop = self.loop = simulated_loop(args)
+        episode = goal_episode(args, self.action_name, self.goal, timeout_s=args.timeout)
+        self.say(state_line(episode))
+        self.say(plant_line(episode))
+        runner = self.runner = EpisodeRunner(episode, listener=self)
         with startup_objects_frozen():
-            return self._run(loop)
+            return self._finish(runner.run())
 
-    def _run(self, loop: ControlLoop) -> int:
-        args = self.args
-        loop.spin_for(SETTLE_S)  # the plant starts without contact forces: let it settle
-        client = ActionClient(loop.runner, self.action_type, self.action_name)
-        self.say("Waiting for an action server to become available...")
-        if not client.wait_for_server():
+    def _finish(self, result: EpisodeResult) -> int:
+        if result.status == UNAVAILABLE:
             print(f"go2-wbc: the '{self.action_name}' action server is not available",
                   file=sys.stderr)
-            return EXIT_UNAVAILABLE
-        self.say("Sending goal:\n" + _block(self.goal) + "\n")
-        handle_future = client.send_goal_async(
-            self.goal, feedback_callback=self._on_feedback if args.feedback else None)
-        # Runs in the tick that decides, before that tick's feedback.
-        handle_future.add_done_callback(self._on_goal_response)
-        handle = None
-        try:
-            while not handle_future.done():
-                loop.spin_once()
-            handle = handle_future.result()
-            if not handle.accepted:
-                return EXIT_REJECTED
-            result_future = handle.get_result_async()
-            deadline_s = loop.robot.time_s + args.timeout
-            canceled = False
-            while not result_future.done():
-                if not canceled and loop.robot.time_s >= deadline_s:
-                    canceled = True
-                    self.say(f"No result after {args.timeout:g} s of simulated time: "
-                             "canceling the goal")
-                    handle.cancel_goal_async()
-                loop.spin_once()
-        except KeyboardInterrupt:
-            return self._interrupted(handle)
-        return self._finish(result_future.result())
+        if result.wrapped is not None:
+            self.say("\nResult:\n" + _block(result.wrapped.result) + "\n")
+            self.say(f"Goal finished with status: {result.status}")
+        return exit_code(result)
 
-    def _on_goal_response(self, future: Any) -> None:
-        handle = future.result()
+    # -- what the runner tells -------------------------------------------------------------
+
+    def goal_sending(self, runner: EpisodeRunner, now_s: float) -> None:
+        self.say("Waiting for an action server to become available...")
+        self.say("Sending goal:\n" + _block(self.goal) + "\n")
+
+    def goal_response(self, handle: ClientGoalHandle, now_s: float) -> None:
         if handle.accepted:
             self.say(f"Goal accepted with ID: {handle.goal_id}\n")
         else:
             rejection = handle.rejection
             self.say(f"Goal was rejected (code {rejection.code}): {rejection.message}")
 
-    def _on_feedback(self, message: FeedbackMessage) -> None:
+    def feedback(self, sample: FeedbackSample, message: FeedbackMessage) -> None:
+        if not self.args.feedback:
+            return
         fields = _rounded(dataclasses.asdict(message.feedback))
         text = yaml.safe_dump(fields, default_flow_style=True, sort_keys=False,
                               width=math.inf).strip()
-        self.say(f"Feedback [{self.loop.robot.time_s:7.3f} s]: {text}")
+        self.say(f"Feedback [{self.runner.loop.robot.time_s:7.3f} s]: {text}")
 
-    def _finish(self, wrapped: Any) -> int:
-        self.say("\nResult:\n" + _block(wrapped.result) + "\n")
-        self.say(f"Goal finished with status: {wrapped.status.name}")
-        return EXIT_SUCCEEDED if wrapped.status is GoalStatus.SUCCEEDED else EXIT_NOT_SUCCEEDED
-
-    def _interrupted(self, handle: Any) -> int:
-        """Ctrl-C: cancel the goal and let the robot unwind (a second Ctrl-C stops at once)."""
-        if handle is None or not handle.accepted:
-            return EXIT_INTERRUPTED
-        self.say("Interrupted: canceling the goal")
-        handle.cancel_goal_async()
-        result_future = handle.get_result_async()
-        end_s = self.loop.robot.time_s + GOAL_SLACK_S
-        while not result_future.done() and self.loop.robot.time_s < end_s:
-            self.loop.spin_once()
-        if result_future.done():
-            self._finish(result_future.result())
-        return EXIT_INTERRUPTED
+    def event(self, event: EpisodeEvent) -> None:
+        if event.event == "timeout":
+            self.say(f"No result after {self.args.timeout:g} s of simulated time: "
+                     "canceling the goal")
+        elif event.event == "interrupted":
+            self.say("Interrupted: canceling the goal")
 
 
 class _BlockDumper(yaml.SafeDumper):

@@ -1,0 +1,96 @@
+"""The ``go2-wbc`` argument parser: its commands, their options, their help."""
+
+from __future__ import annotations
+
+import argparse
+
+from actions.go2.go2_actions import HIGH_FIVE_ACTION, SIT_ACTION, STAND_ACTION
+from actions.go2.go2_interfaces import SitGoal, StandGoal
+from actions.go2.high_five_behaviour import MAX_HOLD_S
+from actions.go2.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
+from sim.cli import goal_commands
+from sim.cli.arg_types import float_in, trajectory_file, whole_in
+from sim.cli.exit_codes import EXIT_CODES_HELP
+from sim.cli.options import CliParser, add_plant_options, run_options
+from sim.cli.send_goal import add_action_commands
+from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
+from sim.episode import episode_default
+from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
+
+EXAMPLES_HELP = """\
+examples:
+  go2-wbc high-five                         # 0.40 m, hold 2 s, headless
+  go2-wbc high-five --height 0.3 --hold 0 --metrics
+  go2-wbc high-five --video hf.mp4 --plot hf.png --report hf.json --log hf.npz
+  go2-wbc high-five --viewer --overlay all  # CoM, support polygon, forces, foot target
+  go2-wbc high-five --push 40,0.1 --push-at 3 --push-dir 90
+  go2-wbc high-five --cancel-at 2.5         # ends CANCELED with the foot down
+  go2-wbc stand; go2-wbc sit --duration 1.5
+  go2-wbc trajectory wave.yaml              # format: go2-wbc trajectory --help
+  go2-wbc high-five --plant identified --plant-param calf_friction_loss=1.4
+  go2-wbc high-five --control-rate 500      # the GO2's usual low-level rate
+
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``go2-wbc`` argument parser."""
+    parser = CliParser(
+        prog="go2-wbc",
+        description="Send an action goal to a simulated Unitree GO2 under whole-body\n"
+                    "control and print its feedback and result, like a ROS 2 action client.",
+        epilog=EXAMPLES_HELP + EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    common = run_options()
+
+    def add(name: str, help_text: str, epilog: str = "") -> argparse.ArgumentParser:
+        command = sub.add_parser(name, parents=[common], help=help_text,
+                                 description=help_text, epilog=epilog + EXIT_CODES_HELP,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+        command.set_defaults(parser=command)
+        return command
+
+    high_five = add(HIGH_FIVE_ACTION.replace("_", "-"),
+                    "raise the front-right foot, hold it up, put it back down")
+    goal = episode_default("goal")  # the Episode's default goal is this command's
+    high_five.add_argument(
+        "--height", type=float_in(MIN_HEIGHT_M, MAX_HEIGHT_M, what="a height", unit="m"),
+        default=goal.target_height, metavar="M",
+        help=f"foot height above the ground [m], in [{MIN_HEIGHT_M:.2f}, {MAX_HEIGHT_M:.2f}] "
+             f"(default: {goal.target_height:.2f})")
+    high_five.add_argument(
+        "--hold", type=whole_in(0, MAX_HOLD_S, what="a whole number of seconds"),
+        default=goal.hold_seconds, metavar="S",
+        help=f"seconds to hold the foot up [s], a whole number in [0, {MAX_HOLD_S}] "
+             f"(default: {goal.hold_seconds})")
+    high_five.set_defaults(run=goal_commands.high_five)
+
+    duration = float_in(MIN_DURATION_S, MAX_DURATION_S, what="a duration", unit="s", fmt="g")
+    for name, verb, run, goal_type in (
+            (STAND_ACTION, "rise to the standing pose", goal_commands.stand, StandGoal),
+            (SIT_ACTION, "lower the body to the lying pose", goal_commands.sit, SitGoal)):
+        pose = add(name, f"{verb} on four feet")
+        default_s = goal_type().duration_s  # the message's default
+        pose.add_argument("--duration", type=duration, default=default_s, metavar="S",
+                          help=f"time to reach the pose [s], in [{MIN_DURATION_S:g}, "
+                               f"{MAX_DURATION_S:g}] (default: {default_s})")
+        pose.set_defaults(run=run)
+
+    trajectory = add("trajectory", "follow a joint trajectory read from a YAML or JSON file "
+                     "(FollowJointTrajectory)", TRAJECTORY_FORMAT_HELP)
+    trajectory.add_argument("file", type=trajectory_file, metavar="FILE",
+                            help="the trajectory file (format below)")
+    trajectory.set_defaults(run=goal_commands.trajectory)
+
+    stand_pd = sub.add_parser("stand-pd", help="stand under a joint PD (baseline, no QP)",
+                              description="Stand under a joint PD with gravity compensation "
+                                          "(the baseline without the QP); print the drift.")
+    stand_pd.add_argument("--duration", type=float_in(0.001, 60.0, what="a duration", unit="s",
+                                                      fmt="g"),
+                          default=3.0, metavar="S",
+                          help="simulated seconds [s], in [0.001, 60] (default: 3.0)")
+    add_plant_options(stand_pd.add_argument_group("simulation"))
+    stand_pd.set_defaults(run=goal_commands.stand_pd, parser=stand_pd)
+    add_action_commands(sub)
+    return parser
