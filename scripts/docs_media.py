@@ -37,17 +37,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from sim.video_recorder import choose_offscreen_gl
-
-choose_offscreen_gl()  # before MuJoCo is imported
-
 import numpy as np
 from PIL import Image
 
-from actions import GoalStatus, HighFiveGoal
-from sim.control_loop import ControlLoop
+from sim.episode import Episode
+from sim.episode_result import EpisodeListener
+from sim.episode_runner import EpisodeRunner
 from sim.scene_overlay import SceneOverlay
-from sim.video_recorder import VideoRecorder
+from sim.video_recorder import VideoRecorder, choose_offscreen_gl
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -105,6 +102,9 @@ def main(argv: list[str] | None = None) -> int:
         "qp": lambda: make_qp(args.qp_json),
         "sweep": lambda: make_sweep(args.sweep_results),
     }
+    # The sim modules import MuJoCo only when they first simulate, and MuJoCo reads
+    # MUJOCO_GL once, at import: choose before any maker runs (the plot's process inherits it).
+    choose_offscreen_gl()
     manifest = json.loads(MANIFEST.read_text()) if MANIFEST.exists() else {}
     code = 0
     for name in names:
@@ -128,58 +128,66 @@ def main(argv: list[str] | None = None) -> int:
 
 def make_high_five(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     """docs/high_five.png and docs/high_five.gif, from one simulated high five."""
-    loop = ControlLoop.simulated()
-    loop.spin_for(0.3)  # settle, as the command line does
-    status = {"phase": "", "progress": 0.0}
-    done: list[GoalStatus] = []
-
-    def on_feedback(message) -> None:
-        status["phase"], status["progress"] = message.feedback.phase, message.feedback.progress
-
-    future = loop.client("high_five").send_goal_async(
-        HighFiveGoal(target_height=0.40, hold_seconds=2), feedback_callback=on_feedback)
-    future.add_done_callback(lambda f: f.result().get_result_async().add_done_callback(
-        lambda r: done.append(r.result().status)))
-    overlay = SceneOverlay(status_of=lambda: (status["phase"], status["progress"]))
-    width = args.gif_width
-    scratch = tempfile.TemporaryDirectory()  # the recorders' own MP4s are not kept
-    folder = Path(scratch.name)
-    recorder = VideoRecorder(loop.sim, folder / "picture.mp4", fps=args.gif_fps,
-                             size=(640, 480), overlay=overlay)
-    small = VideoRecorder(loop.sim, folder / "gif.mp4", fps=args.gif_fps,
-                          size=(width, width * 3 // 4), overlay=overlay)
-    for camera in (recorder.camera, small.camera):  # the video's view, nearer, held still
-        lookat = loop.sim.data.xpos[camera.trackbodyid].copy()
-        camera.type = 0  # mjCAMERA_FREE
-        camera.lookat[:] = lookat
-        camera.distance = DISTANCE_M
-    frames: list[np.ndarray] = []
-    next_frame_s = loop.robot.time_s
-    picture_taken = False
+    shots = _Shots(args)
+    runner = EpisodeRunner(Episode(), listener=shots, hooks=[shots])  # the default high five
+    shots.status_of = lambda: (runner.phase, runner.progress)
     try:
-        while not done:
-            loop.spin_once()
-            now = loop.robot.time_s
-            if now + 1e-9 >= next_frame_s:
-                frames.append(small.render(loop))
-                next_frame_s += 1.0 / args.gif_fps
-            if not picture_taken and now + 1e-9 >= PICTURE_S:
-                Image.fromarray(recorder.render(loop)).save(DOCS / "high_five.png",
-                                                            optimize=True)
-                picture_taken = True
+        result = runner.run()
         for _ in range(args.gif_fps):  # a second on the end pose before the loop restarts
-            frames.append(small.render(loop))
+            shots.frames.append(shots.small.render(runner.loop))
     finally:
-        recorder.close()
-        small.close()
-        scratch.cleanup()
-    write_gif(DOCS / "high_five.gif", frames, fps=args.gif_fps, colours=args.colours)
+        shots.close()
+    write_gif(DOCS / "high_five.gif", shots.frames, fps=args.gif_fps, colours=args.colours)
     command = "scripts/docs_media.py --only high-five"
-    exit_code = 0 if done[0] == GoalStatus.SUCCEEDED else 1
+    exit_code = 0 if result.status == "SUCCEEDED" else 1
     return {"high_five.png": {"made_by": command, "numbers": {"time_s": PICTURE_S},
                               "exit_code": exit_code},
-            "high_five.gif": {"made_by": command, "numbers": {"frames": len(frames),
+            "high_five.gif": {"made_by": command, "numbers": {"frames": len(shots.frames),
                                                               "fps": args.gif_fps}}}
+
+
+class _Shots(EpisodeListener):
+    """The picture and the GIF's frames of a high five: cameras set up when the goal is sent
+    (the robot settled), a frame every 1/fps s of sim time (a loop hook), the picture once."""
+
+    def __init__(self, args: argparse.Namespace):
+        self.fps, self.width = args.gif_fps, args.gif_width
+        self.status_of: Any = None
+        self.frames: list[np.ndarray] = []
+        self.next_frame_s = 0.0
+        self.picture_taken = False
+        self.scratch = tempfile.TemporaryDirectory()  # the recorders' own MP4s are not kept
+        self.recorders: list[VideoRecorder] = []
+
+    def goal_sending(self, runner: EpisodeRunner, now_s: float) -> None:
+        loop, folder = runner.loop, Path(self.scratch.name)
+        overlay = SceneOverlay(status_of=self.status_of)
+        self.picture = VideoRecorder(loop.sim, folder / "picture.mp4", fps=self.fps,
+                                     size=(640, 480), overlay=overlay)
+        self.small = VideoRecorder(loop.sim, folder / "gif.mp4", fps=self.fps,
+                                   size=(self.width, self.width * 3 // 4), overlay=overlay)
+        self.recorders = [self.picture, self.small]
+        for camera in (self.picture.camera, self.small.camera):  # the video's view, held still
+            lookat = loop.sim.data.xpos[camera.trackbodyid].copy()
+            camera.type = 0  # mjCAMERA_FREE
+            camera.lookat[:] = lookat
+            camera.distance = DISTANCE_M
+        self.next_frame_s = now_s
+
+    def __call__(self, loop: Any, out: Any) -> None:
+        now = loop.robot.time_s
+        if now + 1e-9 >= self.next_frame_s:
+            self.frames.append(self.small.render(loop))
+            self.next_frame_s += 1.0 / self.fps
+        if not self.picture_taken and now + 1e-9 >= PICTURE_S:
+            Image.fromarray(self.picture.render(loop)).save(DOCS / "high_five.png",
+                                                            optimize=True)
+            self.picture_taken = True
+
+    def close(self) -> None:
+        for recorder in self.recorders:
+            recorder.close()
+        self.scratch.cleanup()
 
 
 def make_plot() -> dict[str, dict[str, Any]]:

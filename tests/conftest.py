@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
+import pinocchio as pin
+import pytest
+
 from sim.video_recorder import choose_offscreen_gl
+from wbc.model.description import Go2Description
 
 
 def _offscreen_gl_in_this_process() -> None:
@@ -23,13 +28,8 @@ def _offscreen_gl_in_this_process() -> None:
             os.environ[key] = value
 
 
+# At conftest import, before any test module imports MuJoCo (none of the imports above does).
 _offscreen_gl_in_this_process()
-
-import numpy as np
-import pinocchio as pin
-import pytest
-
-from wbc.model.description import Go2Description
 
 
 @pytest.fixture(scope="session")

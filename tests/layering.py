@@ -1,4 +1,5 @@
-"""The library's floors, bottom first, and a reader of its imports that finds the upward ones.
+"""The library's floors, bottom first, and a reader of its imports that finds the upward ones
+and the cycles.
 
 A module may import modules of its own floor and of the floors below. The packages' facades
 (``wbc/__init__.py``, ``tasks/__init__.py``, ``actions/__init__.py``, ...), which re-export
@@ -23,15 +24,19 @@ FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("the controller", ("wbc.controller",)),
     ("motions", ("wbc.motions",)),
     ("the action framework", ("actions",)),
+    ("ROS 2's standard interfaces", ("actions.ros_interfaces",)),
     ("the GO2's behaviours", ("actions.go2",)),
     ("the robot loop", ("actions.robot",)),
     ("the simulator", ("sim",)),
-    ("the command line", ("sim.cli", "sim.action_cli", "sim.cli_trajectory_file")),
+    ("the command line", ("sim.cli",)),
     ("benchmarks", ("benchmarks",)),
 )
 PACKAGES = ("wbc", "tasks", "actions", "sim", "benchmarks")
 #: Package ``__init__`` modules that re-export names for users.
 FACADES = ("wbc", "tasks", "actions", "wbc.backends")
+#: Packages inside which an import cycle is tolerated for now: the QP backend registry
+#: (``wbc.backends.backend``) imports the backends it registers, which import it back.
+TOLERATED_CYCLES = ("wbc.backends",)
 
 
 @dataclass(frozen=True)
@@ -104,3 +109,62 @@ def violations(root: Path) -> list[Violation]:
                 continue
             found[module, line, imported] = Violation(module, line, imported, why)
     return list(found.values())
+
+
+def import_graph(root: Path) -> dict[str, set[str]]:
+    """Every library module under ``root`` and the library modules it imports (at any depth
+    of its code, ``TYPE_CHECKING`` blocks included)."""
+    modules = library_modules(root)
+    return {module: {name for _, name in imports_of(path, modules)
+                     if name in modules and name != module}
+            for module, path in modules.items()}
+
+
+def import_cycles(root: Path) -> list[list[str]]:
+    """The groups of library modules that import one another, directly or through others
+    (the import graph's strongly connected components of two modules or more), each sorted,
+    in the order found."""
+    graph = import_graph(root)
+    order: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    cycles = []
+    for start in graph:  # Tarjan's algorithm, with an explicit stack of iterators
+        if start in order:
+            continue
+        order[start] = low[start] = len(order)
+        stack.append(start)
+        work = [(start, iter(sorted(graph[start])))]
+        while work:
+            module, successors = work[-1]
+            successor = next(successors, None)
+            if successor is not None:
+                if successor not in order:
+                    order[successor] = low[successor] = len(order)
+                    stack.append(successor)
+                    work.append((successor, iter(sorted(graph[successor]))))
+                elif successor in stack:
+                    low[module] = min(low[module], order[successor])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[module])
+            if low[module] == order[module]:
+                group = []
+                while True:
+                    member = stack.pop()
+                    group.append(member)
+                    if member == module:
+                        break
+                if len(group) > 1:
+                    cycles.append(sorted(group))
+    return cycles
+
+
+def untolerated_cycles(root: Path) -> list[list[str]]:
+    """:func:`import_cycles` less those inside one of :data:`TOLERATED_CYCLES`' packages."""
+    def inside(cycle: list[str], package: str) -> bool:
+        return all(m == package or m.startswith(package + ".") for m in cycle)
+
+    return [cycle for cycle in import_cycles(root)
+            if not any(inside(cycle, package) for package in TOLERATED_CYCLES)]

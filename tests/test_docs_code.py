@@ -57,7 +57,7 @@ def test_every_python_block_runs_as_written(page, capsys, monkeypatch):
     namespace: dict = {"__name__": "__docs__"}
     for k, source in enumerate(blocks):
         code = compile(source, f"{page.name}, Python block {k + 1}", "exec")
-        exec(code, namespace)  # noqa: S102 - the documentation's own code
+        exec(code, namespace)  # the documentation's own code
     out = capsys.readouterr().out
     if page.name == "README.md":
         assert "SUCCEEDED high five done: foot raised to 0.400 m" in out

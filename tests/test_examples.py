@@ -1,5 +1,7 @@
-"""The examples and scripts run and do what their docstrings say (``examples/custom_task.py`` has its own
-test, ``tests/test_custom_task.py``)."""
+"""The examples and scripts run and do what their docstrings say.
+
+``examples/custom_task.py`` has its own test, ``tests/test_custom_task.py``.
+"""
 
 from __future__ import annotations
 

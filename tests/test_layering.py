@@ -9,7 +9,15 @@ from pathlib import Path
 
 import pytest
 
-from tests.layering import FACADES, FLOORS, PACKAGES, floor_of, library_modules, violations
+from tests.layering import (
+    FACADES,
+    FLOORS,
+    PACKAGES,
+    floor_of,
+    library_modules,
+    untolerated_cycles,
+    violations,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -54,6 +62,20 @@ def test_a_planted_upward_import_is_found(tmp_path, module, planted, why):
     assert len(found) == 1, found
     assert found[0].module == module.removesuffix(".py").replace("/", ".")
     assert why in found[0].why
+
+
+def test_no_two_library_modules_import_each_other():
+    """No import cycle, direct or through other modules, between library modules (the
+    command line's included), but inside the packages :data:`TOLERATED_CYCLES` names."""
+    found = untolerated_cycles(ROOT)
+    assert not found, "import cycles: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_a_planted_import_cycle_is_found(tmp_path):
+    root = copy_of_the_library(tmp_path)
+    path = root / "sim/cli/output.py"  # goal_run imports output; output now imports goal_run
+    path.write_text(path.read_text() + "\n\ndef _late():\n    import sim.cli.goal_run\n")
+    assert ["sim.cli.goal_run", "sim.cli.output"] in untolerated_cycles(root)
 
 
 def test_the_floors_are_listed_once_each():

@@ -158,5 +158,6 @@ def test_a_type_checker_sees_the_installed_packages_typed(environment: Path,
                 "--follow-imports=silent", "--warn-unused-ignores", "--no-color-output",
                 "--cache-dir", str(tmp_path / "mypy_cache"), str(script)],
                cwd=tmp_path, env=fresh_env())
-    assert 'Revealed type is "def (config: wbc.controller.controller_config.ControllerConfig' in done.stdout
+    constructor = 'Revealed type is "def (config: wbc.controller.controller_config.ControllerConfig'
+    assert constructor in done.stdout
     assert 'Revealed type is "Any"' not in done.stdout
