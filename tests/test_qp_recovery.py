@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
+from tests.failing_backends import failing
 from wbc import WholeBodyController
-from wbc.backends import QpProblem, QpResult, available_backends, register_backend
+from wbc.backends import available_backends, register_backend
 from wbc.backends.backend import unregister_backend
 from wbc.backends.daqp_backend import DaqpBackend
 from wbc.controller.control_output import ControlStatus
@@ -16,22 +17,7 @@ pytestmark = pytest.mark.skipif("osqp" not in available_backends(),
 def _failing_osqp():
     from wbc.backends.osqp_backend import OsqpBackend
 
-    class FailingOsqp(OsqpBackend):
-        """OSQP that reports a failure for the next ``fail_ticks`` solves."""
-
-        name = "failing_osqp"
-
-        def __init__(self) -> None:
-            super().__init__()
-            self.fail_ticks = 0
-
-        def solve(self, problem: QpProblem) -> QpResult:
-            if self.fail_ticks > 0:
-                self.fail_ticks -= 1
-                return QpResult(found=False, x=np.full(problem.n, np.nan), solve_time_s=0.0,
-                                status="injected", reason="injected failure")
-            return super().solve(problem)
-    return FailingOsqp
+    return failing(OsqpBackend, "failing_osqp")
 
 
 @pytest.fixture

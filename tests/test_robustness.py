@@ -26,7 +26,8 @@ from benchmarks.robustness import (
 )
 from sim.control_loop import ControlLoop
 from sim.sensor_faults import FaultyRobot, SensorFault
-from wbc.backends import QpProblem, QpResult, register_backend
+from tests.failing_backends import failing
+from wbc.backends import register_backend
 from wbc.backends.backend import unregister_backend
 from wbc.backends.daqp_backend import DaqpBackend
 from wbc.controller.control_output import ControlStatus
@@ -163,21 +164,7 @@ FAULT_AT_S = HOLD_START_S + PUSH_INTO_HOLD_S
 INJECTED = "injected solver failure"
 
 
-class FailingDaqp(DaqpBackend):
-    """DAQP that reports a failure for the next ``fail_ticks`` solves."""
-
-    name = "failing_daqp"
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.fail_ticks = 0
-
-    def solve(self, problem: QpProblem) -> QpResult:
-        if self.fail_ticks > 0:
-            self.fail_ticks -= 1
-            return QpResult(found=False, x=np.full(problem.n, np.nan), solve_time_s=0.0,
-                            status="injected", reason=INJECTED)
-        return super().solve(problem)
+FailingDaqp = failing(DaqpBackend, "failing_daqp", INJECTED)
 
 
 @pytest.fixture
