@@ -15,7 +15,6 @@ from wbc.robot_io.sdk_low_state import SdkLowState, sensor_record_from_message
 from wbc.robot_io.sdk_motor_command import SdkMotorCommand
 from wbc.robot_io.unitree_sdk import (
     MODE_ENABLE,
-    MODE_STOP,
     POS_STOP_F,
     SDK_MOTOR_SLOTS,
     VEL_STOP_F,
@@ -173,8 +172,12 @@ def test_as_20_slots_and_write_to():
     for name, values in slots.items():
         assert values.shape == (SDK_MOTOR_SLOTS,), name
         np.testing.assert_array_equal(values[:12], getattr(sdk, name), err_msg=name)
-        np.testing.assert_array_equal(values[12:], np.zeros(8), err_msg=name)
-    assert (slots["mode"][12:] == MODE_STOP).all()
+    # Slots 12 to 19 (no GO2 motor) idle as the SDK's examples send them: enabled, the stop
+    # sentinels as targets, no gains, no torque.
+    idle = {"mode": MODE_ENABLE, "q": POS_STOP_F, "dq": VEL_STOP_F, "tau": 0.0, "kp": 0.0,
+            "kd": 0.0}
+    for name, value in idle.items():
+        np.testing.assert_array_equal(slots[name][12:], np.full(8, value), err_msg=name)
     assert slots["mode"].dtype == np.uint8
 
     low_cmd = SimpleNamespace(motor_cmd=[SimpleNamespace() for _ in range(SDK_MOTOR_SLOTS)])

@@ -22,6 +22,7 @@ from wbc.robot_io.unitree_sdk import (
     SDK_LEG_MOTORS,
     SDK_MOTOR_SLOTS,
     VEL_STOP_F,
+    set_idle_motor_slots,
 )
 
 _SDK = JointMap.unitree_sdk()
@@ -181,18 +182,21 @@ class SdkMotorCommand:
         """The whole ``motor_cmd`` list: ``{"mode", "q", "dq", "tau", "kp", "kd"}`` -> (20,).
 
         Keys are the ``MotorCmd_`` attribute names; slots 0 to 11 are this command, slots 12
-        to 19 (no GO2 motor) are stopped with zeros.
+        to 19 (no GO2 motor) idle as the SDK sends them
+        (:func:`~wbc.robot_io.unitree_sdk.set_idle_motor_slots`: enabled, ``q = PosStopF``,
+        ``dq = VelStopF``, ``tau = kp = kd = 0``).
         """
         slots: dict[str, np.ndarray] = {}
         for name in _COMMAND_FIELDS:
             values = getattr(self, name)
-            slots[name] = np.zeros(SDK_MOTOR_SLOTS, dtype=values.dtype)
+            slots[name] = np.empty(SDK_MOTOR_SLOTS, dtype=values.dtype)
             slots[name][:SDK_LEG_MOTORS] = values
-        slots["mode"][SDK_LEG_MOTORS:] = MODE_STOP
+        set_idle_motor_slots(slots)
         return slots
 
     def write_to(self, low_cmd: Any) -> None:
-        """Set ``low_cmd.motor_cmd[0..19]`` (a ``LowCmd_`` or anything shaped like one).
+        """Set ``low_cmd.motor_cmd[0..19]`` (a ``LowCmd_`` or anything shaped like one): this
+        command in slots 0 to 11, slots 12 to 19 idle (:meth:`as_20_slots`).
 
         Only the motor entries are written: the header (``head``, ``level_flag``) and the
         ``crc``, which the SDK computes over the finished message, are the caller's.

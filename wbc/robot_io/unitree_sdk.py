@@ -27,6 +27,9 @@ Joint orders (always mapped by name through :meth:`wbc.model.joint_map.JointMap.
   ``tau + kp (q - q_meas) + kd (dq - dq_meas)``.
 - With ``kp = 0`` the SDK's examples send ``q = PosStopF`` (:data:`POS_STOP_F`, 2.146e9),
   with ``kd = 0`` ``dq = VelStopF`` (:data:`VEL_STOP_F`, 16000.0): "no target".
+- Slots 12 to 19 (no GO2 motor) are sent idle, as the SDK's examples send every motor they do
+  not drive (:data:`IDLE_MOTOR_CMD`, written by :func:`set_idle_motor_slots`): enabled, the
+  two sentinels as targets, ``tau = kp = kd = 0``, so no torque.
 
 :class:`SdkLowState`, what this library reads from ``LowState_``:
 
@@ -52,6 +55,10 @@ base position and linear velocity, which the robot does not measure: the state e
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any
+
 #: ``motor_cmd[i].mode`` of a motor that follows its command.
 MODE_ENABLE = 0x01
 #: ``motor_cmd[i].mode`` of a motor that applies no torque.
@@ -64,3 +71,25 @@ VEL_STOP_F = 16000.0
 SDK_MOTOR_SLOTS = 20
 #: Slots 0 to 11 are the GO2's leg motors.
 SDK_LEG_MOTORS = 12
+#: ``motor_cmd[i]`` of a slot nothing drives, as the SDK's examples send it: enabled
+#: (``mode = 0x01``), the stop sentinels as targets, no gains, no torque.
+IDLE_MOTOR_CMD: Mapping[str, float] = MappingProxyType({
+    "mode": MODE_ENABLE, "q": POS_STOP_F, "dq": VEL_STOP_F, "tau": 0.0, "kp": 0.0, "kd": 0.0,
+})
+
+
+def set_idle_motor_slots(motors: Any, slots: slice = slice(SDK_LEG_MOTORS, SDK_MOTOR_SLOTS)
+                         ) -> None:
+    """Write :data:`IDLE_MOTOR_CMD` into ``slots`` (by default 12 to 19, no GO2 motor).
+
+    The one place that convention is written: :meth:`SdkMotorCommand.as_20_slots` (so
+    :meth:`~wbc.robot_io.sdk_motor_command.SdkMotorCommand.write_to`), the ``LowCmd_``
+    records of :mod:`wbc.robot_io.dds` and their SDK-default command all call it.
+
+    Args:
+        motors: The motor command fields by name, each an array over the 20 slots: a dict of
+            arrays, or a structured array of ``MotorCmd_`` records (``record["motor_cmd"]``).
+        slots: The slots to set.
+    """
+    for name, value in IDLE_MOTOR_CMD.items():
+        motors[name][slots] = value
