@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
+from sim.cli.dds_options import check_dds_options
 from sim.cli.episode_options import check_options
 from sim.cli.exit_codes import (
     EXIT_CODES_HELP,
@@ -42,8 +43,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        if hasattr(args, "plant"):  # the commands that simulate
+        if hasattr(args, "plant") and hasattr(args, "dds"):  # a goal command with --dds
+            check_dds_options(args)
+        if hasattr(args, "plant") and not getattr(args, "dds", False):  # they simulate
             check_options(args)
+        if getattr(args, "dds", False) and hasattr(args, "dds_run"):  # a goal over DDS
+            return int(args.dds_run(args))
         return int(args.run(args))
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED

@@ -8,10 +8,13 @@ from actions.go2.go2_actions import HIGH_FIVE_ACTION, SIT_ACTION, STAND_ACTION
 from actions.go2.go2_interfaces import SitGoal, StandGoal
 from actions.go2.high_five_behaviour import MAX_HOLD_S
 from actions.go2.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
-from sim.cli import goal_commands
+from sim.cli import dds_goal, goal_commands
 from sim.cli.arg_types import float_in, trajectory_file, whole_in
+from sim.cli.bridge import add_bridge_command
+from sim.cli.dds_options import add_dds_options
 from sim.cli.exit_codes import EXIT_CODES_HELP
 from sim.cli.options import CliParser, add_plant_options, run_options
+from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
 from sim.episode import episode_default
@@ -29,6 +32,7 @@ examples:
   go2-wbc trajectory wave.yaml              # format: go2-wbc trajectory --help
   go2-wbc high-five --plant identified --plant-param calf_friction_loss=1.4
   go2-wbc high-five --control-rate 500      # the GO2's usual low-level rate
+  go2-wbc run --dds; go2-wbc high-five --dds  # a controller on DDS and a goal to it
 
 """
 
@@ -64,7 +68,11 @@ def build_parser() -> argparse.ArgumentParser:
         default=goal.hold_seconds, metavar="S",
         help=f"seconds to hold the foot up [s], a whole number in [0, {MAX_HOLD_S}] "
              f"(default: {goal.hold_seconds})")
-    high_five.set_defaults(run=goal_commands.high_five)
+    add_dds_options(high_five.add_argument_group("dds"),
+                    flag_help="send the goal over DDS to a running 'go2-wbc run --dds' "
+                              "instead of simulating (no simulation option then; default: "
+                              "simulate)")
+    high_five.set_defaults(run=goal_commands.high_five, dds_run=dds_goal.high_five)
 
     duration = float_in(MIN_DURATION_S, MAX_DURATION_S, what="a duration", unit="s", fmt="g")
     for name, verb, run, goal_type in (
@@ -93,4 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_plant_options(stand_pd.add_argument_group("simulation"))
     stand_pd.set_defaults(run=goal_commands.stand_pd, parser=stand_pd)
     add_action_commands(sub)
+    sub.choices["send-goal"].set_defaults(dds_run=dds_goal.send_goal)
+    add_bridge_command(sub)
+    add_run_command(sub)
     return parser

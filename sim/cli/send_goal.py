@@ -23,6 +23,7 @@ from actions.go2.go2_actions import GO2_ACTIONS
 from actions.go2.go2_interfaces import ACTION_TYPES
 from actions.message_fields import set_message_fields
 from actions.responses import FeedbackMessage
+from sim.cli.dds_options import add_dds_options
 from sim.cli.episode_options import goal_episode
 from sim.cli.exit_codes import EXIT_CODES_HELP, EXIT_SUCCEEDED, exit_code
 from sim.cli.options import add_plant_options, add_state_options
@@ -178,6 +179,10 @@ def add_action_commands(sub: Any) -> None:
     simulation = send.add_argument_group("simulation")
     add_plant_options(simulation)
     add_state_options(simulation)
+    add_dds_options(send.add_argument_group("dds"),
+                    flag_help="send the goal over DDS to a running 'go2-wbc run --dds' "
+                              "instead of simulating (--timeout is then wall-clock seconds; "
+                              "no simulation option; default: simulate)")
     send.set_defaults(run=_send_goal, parser=send)
 
     listing = sub.add_parser(

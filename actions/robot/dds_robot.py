@@ -1,0 +1,324 @@
+"""A GO2 (or its simulator) on DDS as a :class:`~actions.robot.robot_interface.RobotInterface`:
+``rt/lowstate`` in, ``rt/lowcmd`` out, the way unitree_sdk2 talks to the robot.
+
+State: a BestEffort, KeepLast 1 reader (unitree_sdk2's), taken without blocking once a control
+period. The reader holds only the newest ``LowState_``; :meth:`DdsRobot.read_sensors` returns it
+once (``None`` when nothing new came: never a queue of stale states) and counts the ticks it
+never saw. A frame with a wrong ``head`` or CRC is dropped and counted.
+
+The record's clock: ``tick`` is the robot's own ``LowState_.tick`` (the estimator tells a new
+sample from a repeated one by it); ``stamp_s`` is :attr:`DdsRobot.time_s` when the sample was
+taken from the reader: one monotonic clock (``time.monotonic``, from the robot object's
+creation) for the stamps, the loop's time and the runner's. The robot's tick is not used as a
+clock: its unit differs between a GO2 and a simulator, and it restarts with the robot.
+
+Command: a Reliable, KeepLast 1 writer (unitree_sdk2's) of ``LowCmd_`` with the SDK's header,
+``reserve`` set to the ``tick`` of the state the command answers (a bridge measures the
+state-to-command latency by it) and the CRC over all of it. A frame that would fail the
+robot's checks is never published.
+"""
+
+from __future__ import annotations
+
+import atexit
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from cyclonedds.core import (
+    InstanceState,
+    Policy,
+    Qos,
+    ReadCondition,
+    SampleState,
+    ViewState,
+    WaitSet,
+)
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+from wbc.core.errors import ConfigurationError, WbcError
+from wbc.model.description import JOINT_NAMES, LEGS
+from wbc.robot_io.dds.c_layout import HEAD, crc_ok, sdk_default_low_cmd
+from wbc.robot_io.dds.domain_config import delete_entities, join_domain
+from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
+from wbc.robot_io.dds.low_cmd_conversion import low_cmd_fault, low_cmd_from_sdk_command
+from wbc.robot_io.dds.low_state_conversion import sensor_record_from_low_state
+from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
+from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.sdk_motor_command import SdkMotorCommand
+from wbc.robot_io.sensor_record import SensorRecord
+
+logger = logging.getLogger(__name__)
+
+#: unitree_sdk2's writer: Reliable (blocking at most 100 ms), KeepLast 1.
+COMMAND_QOS = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
+                  Policy.History.KeepLast(1))
+#: unitree_sdk2's reader: BestEffort, KeepLast 1 (only the newest state is held).
+STATE_QOS = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1))
+_TAKE_MAX = 8  # KeepLast 1 holds one; more only if a writer of another instance appeared
+_TICK_WRAP = 1 << 32
+_HEAD = np.array(HEAD, dtype=np.uint8)
+
+
+def _topic(participant: Any, name: str, data_type: Any) -> Topic[Any]:
+    """A topic of a wire-message type (cyclonedds' type hints know only ``IdlStruct``)."""
+    return Topic(participant, name, data_type)
+
+
+class NoRobotStateError(WbcError, TimeoutError):
+    """No valid ``LowState_`` came in time: no robot or bridge publishes on the domain."""
+
+
+def state_fault(record: np.ndarray) -> str | None:
+    """Why a ``LowState_`` record cannot be used (wrong ``head`` or CRC), or ``None``."""
+    if not np.array_equal(record["head"], _HEAD):
+        head = " ".join(f"{int(b):02X}" for b in record["head"])
+        return f"LowState_.head: expected FE EF, received {head}"
+    if not crc_ok(record):
+        return f"LowState_.crc: 0x{int(record['crc']):08X} does not match the content"
+    return None
+
+
+@dataclass
+class DdsRobotCounters:
+    """What the robot's reader and writer saw since the start (all counts)."""
+
+    #: Valid states returned by ``read_sensors``.
+    states_used: int = 0
+    #: Robot ticks that were never taken (the reader holds only the newest).
+    ticks_skipped: int = 0
+    #: ``read_sensors`` calls that found nothing new (``None`` returned).
+    no_new_state: int = 0
+    #: Frames dropped for a wrong ``head`` or CRC.
+    bad_frames: int = 0
+    #: A state whose tick is not after the last one's (robot restarted): used, counted.
+    tick_restarts: int = 0
+    #: Commands published (in a dry run: built and kept).
+    commands_sent: int = 0
+    #: Commands refused (a value the SDK's command cannot carry): nothing published.
+    commands_refused: int = 0
+
+
+class DdsRobot:
+    """A GO2 on DDS: read the newest ``LowState_``, publish ``LowCmd_`` (see the module doc).
+
+    Arrays are in the description's orders (:data:`~wbc.model.description.JOINT_NAMES`,
+    :data:`~wbc.model.description.LEGS`): the SDK's FR, FL, RR, RL motor slots are mapped by
+    joint name on the way in and out, so a ``MappedRobot`` around it copies, never reorders.
+
+    Args:
+        domain_id: The DDS domain (a GO2: 0; the simulator bridge: 1 by convention).
+        interface: The network interface (``lo``; a GO2's Ethernet interface, e.g. ``eth0``).
+        dry_run: Publish nothing: every command is built, checked and kept
+            (:attr:`last_command`, :attr:`last_low_cmd`) for inspection.
+        clock: The monotonic clock [s] (``time.monotonic``); injectable for tests.
+
+    Raises:
+        ConfigurationError: An invalid domain id or interface (the valid ones named).
+
+    Example:
+        >>> robot = DdsRobot(domain_id=1, interface="lo")
+        >>> robot.wait_for_first_state(5.0)
+        >>> loop = ControlLoop(robot, WholeBodyController(control_period_s=0.002))
+    """
+
+    joint_names: tuple[str, ...] = JOINT_NAMES
+    leg_names: tuple[str, ...] = LEGS
+
+    def __init__(self, *, domain_id: int = 1, interface: str = "lo", dry_run: bool = False,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.domain_id = domain_id
+        self.interface = interface
+        self.dry_run = bool(dry_run)
+        self._clock = clock
+        self._t0 = clock()
+        self.counters = DdsRobotCounters()
+        #: Why the last bad frame or refused command was dropped ('' if none was).
+        self.last_fault = ""
+        self._record = SensorRecord.zeros()
+        self._pending: np.ndarray | None = None  # a state taken while waiting, not yet read
+        self._last_tick: int | None = None
+        self._answer_tick = 0
+        self._cmd_record = sdk_default_low_cmd()
+        self._cmd_message = LowCmdMessage(self._cmd_record)
+        self.last_command: SdkMotorCommand | None = None
+        self._lock = threading.Lock()
+        self._dds = join_domain(interface, domain_id=domain_id)
+        self._writer: DataWriter | None = None
+        try:
+            participant = self._dds.participant
+            self._state_topic = _topic(participant, LOW_STATE_TOPIC, LowStateMessage)
+            self._reader = DataReader(participant, self._state_topic, qos=STATE_QOS)
+            self._cmd_topic = None
+            if not self.dry_run:
+                self._cmd_topic = _topic(participant, LOW_CMD_TOPIC, LowCmdMessage)
+                self._writer = DataWriter(participant, self._cmd_topic, qos=COMMAND_QOS)
+            self._waitset = WaitSet(participant)
+            self._condition = ReadCondition(
+                self._reader, SampleState.Any | ViewState.Any | InstanceState.Any)
+            self._waitset.attach(self._condition)
+        except BaseException:
+            self._dds.close()
+            raise
+        atexit.register(self.close)  # readers go before the interpreter does
+
+    # -- RobotInterface ---------------------------------------------------------------------
+
+    @property
+    def time_s(self) -> float:
+        """Seconds since this object was made, on the monotonic clock."""
+        return self._clock() - self._t0
+
+    @property
+    def answer_tick(self) -> int:
+        """The ``tick`` of the newest state returned: what the next command's ``reserve``
+        carries (0 before the first)."""
+        return self._answer_tick
+
+    @property
+    def last_low_cmd(self) -> np.ndarray:
+        """The last ``LowCmd_`` record built (published unless a dry run): a copy, padding
+        bytes included (the CRC covers them; ``ndarray.copy`` does not copy them)."""
+        record = self._cmd_record
+        return np.ndarray((), dtype=record.dtype, buffer=bytearray(record.tobytes()))
+
+    def read_sensors(self) -> SensorRecord | None:
+        """The newest valid state not returned before, or ``None`` (nothing new, or only bad
+        frames). The record is this object's buffer, refilled by the next call."""
+        record = self._take_newest()
+        if record is None:
+            self.counters.no_new_state += 1
+            return None
+        tick = int(record["tick"])
+        if self._last_tick is not None:
+            step = (tick - self._last_tick) % _TICK_WRAP
+            if step == 0:  # the same sample again
+                self.counters.no_new_state += 1
+                return None
+            if step < _TICK_WRAP // 2:
+                self.counters.ticks_skipped += step - 1
+            else:
+                self.counters.tick_restarts += 1
+        self._last_tick = self._answer_tick = tick
+        self.counters.states_used += 1
+        return sensor_record_from_low_state(record, stamp_s=self.time_s, out=self._record)
+
+    def write_command(self, command: MotorCommand) -> None:
+        """Publish ``command`` (description order) as a ``LowCmd_`` answering
+        :attr:`answer_tick`; in a dry run, build and keep it only.
+
+        A command the SDK's message cannot carry (a non-finite value, a negative gain) is
+        refused: nothing is published (the robot's own timeout then applies), the refusal is
+        counted and logged, and the loop goes on.
+        """
+        try:
+            sdk = SdkMotorCommand.from_control_output(command)
+        except ConfigurationError as err:
+            self._refuse(f"command not sent: {err}")
+            return
+        record = self._cmd_record
+        record["reserve"] = self._answer_tick  # before the CRC, which covers it
+        low_cmd_from_sdk_command(sdk, out=record)
+        fault = low_cmd_fault(record)
+        if fault is not None:  # never happens with the SDK's header; never publish one
+            self._refuse(f"command not sent: {fault}")
+            return
+        self.last_command = sdk
+        with self._lock:
+            if self._writer is not None:
+                self._writer.write(self._cmd_message)
+        self.counters.commands_sent += 1
+
+    # -- start-up and teardown --------------------------------------------------------------
+
+    def wait_for_first_state(self, timeout_s: float = 5.0) -> SensorRecord:
+        """Block until a valid state arrives; it is what the next :meth:`read_sensors` returns.
+
+        Args:
+            timeout_s: Longest wait [s, wall clock].
+
+        Raises:
+            NoRobotStateError: Nothing valid in time; the message names the topic, the domain
+                and the interface, what was seen, and asks whether the bridge or robot runs.
+        """
+        deadline = time.monotonic() + timeout_s
+        while True:
+            record = self._take_newest()
+            if record is not None:
+                self._pending = record
+                return sensor_record_from_low_state(record, stamp_s=self.time_s)
+            remaining = deadline - time.monotonic()
+            if remaining <= 0.0:
+                raise NoRobotStateError(self._no_state_message(timeout_s))
+            self._waitset.wait(duration(seconds=min(remaining, 0.05)))
+
+    def wait_for_new_state(self, timeout_s: float) -> bool:
+        """Whether a state not yet read is waiting in the reader, waiting for one at most
+        ``timeout_s`` [s]; nothing is taken (a frame that turns out bad counts as one)."""
+        if self._pending is not None or self._condition.triggered:
+            return True
+        if timeout_s > 0.0:
+            self._waitset.wait(duration(seconds=timeout_s))
+        return bool(self._condition.triggered)
+
+    def stats(self) -> dict[str, int]:
+        """The counters as a dict (for reports)."""
+        return asdict(self.counters)
+
+    def close(self) -> None:
+        """Delete the reader and writer and leave the domain; idempotent."""
+        atexit.unregister(self.close)
+        with self._lock:
+            if self._dds.is_closed:
+                return
+            writer, self._writer = self._writer, None
+            delete_entities(self._waitset, self._condition, self._reader, writer)
+            self._dds.close()
+
+    def __enter__(self) -> DdsRobot:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- internals --------------------------------------------------------------------------
+
+    def _take_newest(self) -> np.ndarray | None:
+        """The newest valid state in the reader (or the one a wait took), without blocking."""
+        newest, self._pending = self._pending, None
+        for sample in self._reader.take(_TAKE_MAX):
+            if not sample.sample_info.valid_data:
+                continue  # a writer went away: an instance state change, no data
+            fault = state_fault(sample.record)
+            if fault is not None:
+                self.counters.bad_frames += 1
+                self.last_fault = fault
+                continue
+            newest = sample.record
+        return newest
+
+    def _refuse(self, reason: str) -> None:
+        if not self.counters.commands_refused:
+            logger.warning("DdsRobot: %s (logged once; counted in commands_refused)", reason)
+        self.counters.commands_refused += 1
+        self.last_fault = reason
+
+    def _no_state_message(self, timeout_s: float) -> str:
+        publishers = self._reader.get_subscription_matched_status().current_count
+        seen = (f"{publishers} publisher(s) of {LOW_STATE_TOPIC} matched but sent no valid "
+                f"state" if publishers else f"no publisher of {LOW_STATE_TOPIC} matched")
+        if self.counters.bad_frames:
+            seen += (f"; {self.counters.bad_frames} frame(s) dropped, the last because "
+                     f"{self.last_fault}")
+        return (f"no LowState_ on {LOW_STATE_TOPIC} within {timeout_s:g} s (DDS domain "
+                f"{self.domain_id}, interface {self.interface!r}): {seen}. Is the bridge or "
+                f"robot running? (the simulator: 'go2-wbc bridge --domain {self.domain_id} "
+                f"--interface {self.interface}'; a GO2: domain 0 on the interface of its "
+                "Ethernet link, with sport mode released)")

@@ -1,0 +1,343 @@
+"""Runs a :class:`~actions.robot.control_loop.ControlLoop` on the wall clock: a robot on DDS.
+
+Each tick waits for its deadline (:class:`~actions.robot.deadline_clock.DeadlineClock`: 500 Hz
+by default, never bursting after a miss), then runs the loop's period in timed stages
+(:mod:`actions.robot.tick_stats`): read the newest state and estimate, tick the actions (and
+the stop phases of :mod:`actions.robot.rest_sequence`), run the controller, write the command,
+poll the DDS action bridge, run the hooks.
+
+Phase: a robot sends its states on its own clock, at the same rate. Ticking just before a
+state arrives would answer every state a period late (and miss some). So, when the robot can
+say whether a state is waiting (``wait_for_new_state``, as
+:class:`~actions.robot.dds_robot.DdsRobot` can), each tick first waits up to ``align_s`` for
+one, and the deadlines follow the states: later by the time waited, or, when a state was
+already there, earlier by :data:`ALIGN_STEP_S` to find the arrival again. The tick then starts
+within tens of microseconds of the state's arrival. A robot whose states stop or come slower
+than the loop (more than :data:`ALIGN_PAUSE_SHARE` of the waits of :data:`ALIGN_WINDOW_S` in
+vain) pauses the alignment for :data:`ALIGN_PAUSE_S`; the loop then ticks on its own deadlines.
+
+Staleness: the estimator already distrusts a robot that sends nothing (``trust_timeout_s`` of
+ticks without a sample: the loop sends the controller's safe command with the reason, the
+running goal ends ABORTED, and control resumes when states return). It counts control
+periods; a loop that misses deadlines takes longer than that. The watchdog here counts wall
+time: no fresh state for ``stale_after_s`` (default: the estimator's ``trust_timeout_s``)
+sends the safe command too, with its own reason.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import signal
+import time
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from actions.robot.deadline_clock import DEFAULT_SPIN_S, DeadlineClock
+from actions.robot.rest_sequence import Phase, RestSequence, RestSettings, active_goals
+from actions.robot.tick_stats import SERIES, TickStats
+from wbc.controller.control_output import ControlOutput, ControlStatus
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import is_finite_real
+
+if TYPE_CHECKING:
+    from actions.robot.control_loop import ControlLoop
+
+#: The watchdog's limit [s] when the estimator has no ``trust_timeout_s``.
+DEFAULT_STALE_AFTER_S = 0.01
+#: Longest wait [s] for the robot's state after a deadline (a quarter of a 500 Hz period).
+DEFAULT_ALIGN_S = 5e-4
+#: How much earlier [s] the next deadline is when the state was there before this one.
+ALIGN_STEP_S = 2e-5
+#: Share of the ticks of :data:`ALIGN_WINDOW_S` [s] whose wait for a state may end in vain
+#: before the alignment pauses for :data:`ALIGN_PAUSE_S` [s] (a robot slower than the loop,
+#: or silent: each vain wait idles ``align_s`` of the period).
+ALIGN_PAUSE_SHARE, ALIGN_WINDOW_S, ALIGN_PAUSE_S = 0.2, 0.1, 2.0
+(_READ, _ACTIONS, _CONTROLLER, _WRITE, _BRIDGE, _HOOKS, _TICK, _CPU, _LATENCY, _WAKE,
+ _ALIGN) = range(len(SERIES))
+
+
+class RealtimeLoop:
+    """A control loop ticking on the wall clock, with its stop phases and timing.
+
+    Args:
+        loop: The control loop, on a robot whose ``time_s`` is the wall clock (a
+            :class:`~actions.robot.dds_robot.DdsRobot`), estimating its state.
+        rate_hz: Ticks per second; the controller's period must be ``1 / rate_hz``.
+        bridge: A DDS action bridge to poll each tick (not also as a loop hook).
+        stale_after_s: The watchdog's limit [s] without a fresh state (see the module doc).
+        align_s: Longest wait [s] for the robot's state after each deadline (see the module
+            doc); 0 ticks on the deadlines alone.
+        rest: How the robot is stood up at the start and brought to rest at the end.
+        clock, sleep, spin_s: The deadlines' clock, sleep and spin (see
+            :class:`~actions.robot.deadline_clock.DeadlineClock`); injectable for tests.
+        timer: The stage timer [s] (``time.perf_counter``).
+        cpu_clock: The thread's CPU time [s] (``time.thread_time``).
+
+    Raises:
+        ConfigurationError: A loop without an estimator, a rate its controller is not
+            configured for, or an invalid limit.
+    """
+
+    def __init__(self, loop: ControlLoop, *, rate_hz: float = 500.0, bridge: Any = None,
+                 stale_after_s: float | None = None, rest: RestSettings | None = None,
+                 align_s: float = DEFAULT_ALIGN_S,
+                 clock: Callable[[], float] = time.monotonic,
+                 sleep: Callable[[float], None] = time.sleep, spin_s: float = DEFAULT_SPIN_S,
+                 timer: Callable[[], float] = time.perf_counter,
+                 cpu_clock: Callable[[], float] = time.thread_time) -> None:
+        if loop.estimator is None:
+            raise ConfigurationError(
+                "loop: a wall-clock loop estimates its state; build it with state='estimate'")
+        if not is_finite_real(rate_hz) or rate_hz <= 0.0:
+            raise ConfigurationError(f"rate_hz: expected a rate > 0 [Hz], received {rate_hz!r}")
+        period = loop.controller.control_period_s
+        if abs(period * rate_hz - 1.0) > 1e-9:
+            raise ConfigurationError(
+                f"rate_hz: the controller runs every {period:g} s ({1.0 / period:g} Hz), the "
+                f"loop was asked for {rate_hz:g} Hz; build the controller with "
+                f"control_period_s={1.0 / rate_hz:g}")
+        if stale_after_s is None:
+            config = getattr(loop.estimator, "config", None)
+            stale_after_s = getattr(config, "trust_timeout_s", DEFAULT_STALE_AFTER_S)
+        if not is_finite_real(stale_after_s) or stale_after_s <= 0.0:
+            raise ConfigurationError(
+                f"stale_after_s: expected seconds > 0, received {stale_after_s!r}")
+        if not is_finite_real(align_s) or not 0.0 <= align_s < 1.0 / rate_hz:
+            raise ConfigurationError(
+                f"align_s: expected seconds in [0, the period {1.0 / rate_hz:g}), received "
+                f"{align_s!r}")
+        self.loop = loop
+        self.rate_hz = float(rate_hz)
+        robot = getattr(loop.robot, "robot", loop.robot)
+        #: Waits for the robot's next state (``None``: the robot cannot, or no alignment).
+        self._state_wait: Callable[[float], bool] | None = (
+            getattr(robot, "wait_for_new_state", None) if align_s > 0.0 else None)
+        self.align_s = float(align_s)
+        #: Ticks whose wait for a state ended in vain; times the alignment paused.
+        self.align_timeouts = 0
+        self.align_pauses = 0
+        self._align_window = (0, 0)  # (ticks, timeouts) at the start of this window
+        self._align_paused_until = -math.inf
+        self.bridge = bridge
+        self.stale_after_s = float(stale_after_s)
+        self.deadlines = DeadlineClock(1.0 / rate_hz, clock=clock, sleep=sleep, spin_s=spin_s)
+        self.stats = TickStats(window_ticks=round(rate_hz))
+        self.rest = RestSequence(loop, rest)
+        #: Called every tick, in the hooks stage, with this object (logs, status).
+        self.callbacks: list[Callable[[RealtimeLoop], None]] = []
+        self._clock = clock
+        self._timer = timer
+        self._cpu = cpu_clock
+        #: This tick's times [s] by :data:`~actions.robot.tick_stats.SERIES` (being filled).
+        self.times = np.zeros(len(SERIES))
+        #: The previous tick's times [s], complete.
+        self.last_times = np.full(len(SERIES), math.nan)
+        #: The last tick had a fresh state; its command (``None`` while damping).
+        self.fresh = False
+        self.last_output: ControlOutput | None = None
+        #: Whether the last tick overran the next deadline.
+        self.missed = False
+        self._last_fresh_s = loop.robot.time_s  # the loop was built from a sample
+        self._stale = False
+        self._started = False
+        self._status_mark = (math.nan, 0, 0, 0)
+
+    # -- running ----------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Stand the robot if it is down (see :class:`RestSettings`), start the deadlines."""
+        if not self._started:
+            self._started = True
+            self.rest.stand_if_down()
+            self.deadlines.start()
+            self._status_mark = (self.loop.robot.time_s, 0, 0, 0)
+
+    def request_stop(self, reason: str) -> None:
+        """Bring the robot to rest and stop (a second request: damp now). Any thread."""
+        self.rest.request_stop(reason)
+
+    @property
+    def done(self) -> bool:
+        """The stop phases are over: the loop may exit."""
+        return self.rest.phase is Phase.DONE
+
+    def run(self, *, duration_s: float | None = None) -> None:
+        """Tick until stopped and at rest; ``duration_s`` [s] of robot time requests the stop.
+
+        An exception from a tick sends the damping command once, then propagates.
+        """
+        self.start()
+        end = math.inf if duration_s is None else self.loop.robot.time_s + duration_s
+        asked = False
+        while not self.done:
+            if not asked and self.loop.robot.time_s >= end:
+                asked = True
+                self.request_stop(f"duration {duration_s:g} s elapsed")
+            self.tick()
+
+    def tick(self) -> None:
+        """Wait for the deadline, run one period, account for it."""
+        if not self._started:
+            self.start()
+        wake_s = self.deadlines.wait()
+        align_s = self._align()
+        try:
+            self._tick_body(wake_s, align_s)
+        except BaseException:
+            with contextlib.suppress(Exception):  # the tick's own error is the one to raise
+                self.loop.robot.write_command(self.rest.damping)
+            raise
+        self.missed = self.deadlines.tick_done()
+        self.stats.add(self.times, fresh=self.fresh, missed=self.missed)
+
+    def _align(self) -> float:
+        """Wait for the robot's state, move the deadlines to it (module doc); the wait [s]."""
+        wait = self._state_wait
+        now = self.loop.robot.time_s
+        if wait is None or now < self._align_paused_until:
+            return 0.0
+        waited = 0.0
+        if wait(0.0):
+            self.deadlines.shift(-ALIGN_STEP_S)  # it was there: look for its arrival earlier
+        else:
+            t0 = self._clock()  # the deadlines' clock: the shift is in its seconds
+            arrived = wait(self.align_s)
+            waited = self._clock() - t0
+            if arrived:
+                self.deadlines.shift(waited)  # the state comes later in the period: follow it
+            else:
+                self.align_timeouts += 1
+        ticks, timeouts = self._align_window
+        window = ALIGN_WINDOW_S * self.rate_hz
+        if self.stats.ticks - ticks >= window:
+            if self.align_timeouts - timeouts > ALIGN_PAUSE_SHARE * window:
+                self.align_pauses += 1
+                self._align_paused_until = now + ALIGN_PAUSE_S
+            self._align_window = (self.stats.ticks, self.align_timeouts)
+        return waited
+
+    def _tick_body(self, wake_s: float, align_s: float) -> None:
+        loop, timer, times = self.loop, self._timer, self.times
+        self.last_times[:] = times
+        c0, t0 = self._cpu(), timer()
+        now = loop.robot.time_s
+        record = loop.robot.read_sensors()
+        q, v = loop.estimate_state(record)
+        loop.context.observe(now, q, v)
+        self.fresh = record is not None
+        if self.fresh:
+            self._last_fresh_s = now
+        t1 = timer()
+        phase = self.rest.step(now)
+        out: ControlOutput | None = None
+        if phase < Phase.DAMPING:
+            loop.runner.tick(now)
+            t2 = timer()
+            out = self._watchdog(loop.guard(loop.command(q, v), v), v, now)
+            loop.context.record_output(out)
+            loop.last_output = out
+            t3 = timer()
+            loop.robot.write_command(out)
+        else:
+            t2 = t3 = timer()
+            loop.robot.write_command(self.rest.damping)
+        self.last_output = out
+        t4 = timer()
+        if self.bridge is not None:
+            self.bridge.poll()
+        t5 = timer()
+        if out is not None:
+            for hook in loop.hooks:
+                hook(loop, out)
+        for callback in self.callbacks:
+            callback(self)
+        t6 = timer()
+        times[_READ], times[_ACTIONS], times[_CONTROLLER] = t1 - t0, t2 - t1, t3 - t2
+        times[_WRITE], times[_BRIDGE], times[_HOOKS] = t4 - t3, t5 - t4, t6 - t5
+        times[_TICK], times[_CPU] = t6 - t0, self._cpu() - c0
+        times[_LATENCY], times[_WAKE], times[_ALIGN] = t4 - t0, wake_s, align_s
+
+    def _watchdog(self, out: ControlOutput, v: np.ndarray, now_s: float) -> ControlOutput:
+        """``out``, or the safe command after ``stale_after_s`` without a fresh state."""
+        stale_s = now_s - self._last_fresh_s
+        if stale_s <= self.stale_after_s:
+            self._stale = False
+            return out
+        if not self._stale:
+            self._stale = True
+            self.stats.watchdog_trips += 1
+        if out.status is ControlStatus.FALLBACK:
+            return out  # the estimator's safe command, with its reason
+        return self.loop.controller.safe_command(v, (
+            f"watchdog: no fresh robot state for {stale_s * 1e3:.0f} ms (limit "
+            f"{self.stale_after_s * 1e3:g} ms)"))
+
+    # -- reporting --------------------------------------------------------------------------
+
+    def goal_text(self) -> str:
+        """The running goal and its status (``idle`` when none)."""
+        goals = active_goals(self.loop)
+        if not goals:
+            return "idle"
+        return f"{goals[0].label} {goals[0].status.name}"
+
+    def status_line(self) -> str:
+        """One line on the last interval: tick rate, misses, no-state ticks, own tick
+        latency, the goal, the controller's status. Resets the interval."""
+        now, stats = self.loop.robot.time_s, self.stats
+        since, ticks, misses, stale = self._status_mark
+        self._status_mark = (now, stats.ticks, stats.misses, stats.no_fresh_state)
+        elapsed = now - since
+        rate = (stats.ticks - ticks) / elapsed if elapsed > 0 else math.nan
+        out = self.last_output
+        if out is None:
+            control, phase = "motors damping", ""
+        else:
+            control = out.status.name + (f" ({out.message[:60]})" if out.message else "")
+            phase = "" if self.rest.phase is Phase.RUNNING else f" | {self.rest.phase.name}"
+        return (f"t {now:7.1f} s | {rate:6.1f} Hz | misses {stats.misses - misses} | "
+                f"no state {stats.no_fresh_state - stale} | latency p50 "
+                f"{stats.recent('latency', 50) * 1e3:.2f} ms p99 "
+                f"{stats.recent('latency', 99) * 1e3:.2f} ms | cpu p99 "
+                f"{stats.recent('cpu', 99) * 1e3:.2f} ms | {self.goal_text()} | {control}"
+                f"{phase}")
+
+    def report(self) -> dict[str, Any]:
+        """The run's figures for a JSON report: rate, counters, per-stage timing [ms], the
+        robot's counters, how it stopped, every goal's terminal event."""
+        robot = getattr(self.loop.robot, "robot", self.loop.robot)
+        robot_stats = robot.stats() if hasattr(robot, "stats") else {}
+        ended = ("succeeded", "canceled", "aborted", "rejected")
+        return {
+            "rate_hz": self.rate_hz, "duration_s": self.loop.robot.time_s,
+            "stale_after_s": self.stale_after_s, **self.stats.report(), "robot": robot_stats,
+            "align": {"max_wait_s": self.align_s, "active": self._state_wait is not None,
+                      "timeouts": self.align_timeouts, "pauses": self.align_pauses},
+            "stop": {"reason": self.rest.stop_reason, "phase": self.rest.phase.name,
+                     "notes": self.rest.notes},
+            "goals": [{"t_s": t, "goal_id": goal_id, "event": event, "detail": str(detail)}
+                      for t, goal_id, event, detail in self.loop.runner.event_log
+                      if event in ended],
+        }
+
+
+@contextlib.contextmanager
+def stop_on_signals(loop: RealtimeLoop,
+                    signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> Iterator[None]:
+    """While the block runs, SIGINT (Ctrl-C) and SIGTERM ask ``loop`` to come to rest (a
+    second one: damp now) instead of raising; the previous handlers come back after.
+
+    Call it on the main thread (Python runs signal handlers there).
+    """
+    def handler(signum: int, frame: object) -> None:
+        loop.request_stop(signal.Signals(signum).name)
+
+    previous = {sig: signal.signal(sig, handler) for sig in signals}
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)

@@ -1,0 +1,195 @@
+"""Start and stop a robot's control loop safely: stand a robot that is down, and bring it to
+rest before the controller exits.
+
+Stopping (:meth:`RestSequence.request_stop`), in phases, one control tick at a time:
+
+1. ``UNWINDING``: every running goal is canceled and unwinds as its server defines (a high
+   five puts the foot down). A goal that arrives meanwhile is canceled too.
+2. ``SITTING``: a ``sit`` goal lowers the body to the lying pose.
+3. ``DAMPING``: the action runner is shut down (new goals are rejected) and the motors get a
+   pure damping command (no stiffness, no torque) for ``damp_s``.
+4. ``DONE``: the loop may exit.
+
+A second stop request skips to ``DAMPING``; so does a stop that has not reached ``DAMPING``
+within ``timeout_s`` (a goal that will not end, a sit that cannot run).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from concurrent.futures import Future
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from actions.go2.go2_actions import SIT_ACTION, STAND_ACTION
+from actions.go2.go2_interfaces import SitGoal, StandGoal
+from actions.go2.robot_context import STANDING_HEIGHT_M
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import is_finite_real
+from wbc.model.description import JOINT_NAMES
+from wbc.robot_io.motor_command import MotorCommand
+
+if TYPE_CHECKING:
+    from actions.client_goal_handle import ClientGoalHandle
+    from actions.goal_record import GoalRecord
+    from actions.robot.control_loop import ControlLoop
+
+
+class Phase(enum.IntEnum):
+    """Where a loop is between its start and its exit."""
+
+    RUNNING = 0
+    UNWINDING = 1
+    SITTING = 2
+    DAMPING = 3
+    DONE = 4
+
+
+@dataclass(frozen=True)
+class RestSettings:
+    """How a loop starts and comes to rest.
+
+    Attributes:
+        stand_on_start: Stand the robot up first if its base is below
+            :data:`~actions.go2.robot_context.STANDING_HEIGHT_M`.
+        stand_s: Duration [s] of that stand.
+        sit_s: Duration [s] of the sit when stopping.
+        damping_kd: Joint damping [N m s/rad] of the final command (no stiffness, no torque).
+        damp_s: How long [s] the damping command is sent before the loop exits.
+        timeout_s: Longest [s] from a stop request to ``DAMPING`` (a goal's unwind, then the
+            sit).
+    """
+
+    stand_on_start: bool = True
+    stand_s: float = 2.0
+    sit_s: float = 1.5
+    damping_kd: float = 5.0
+    damp_s: float = 0.5
+    timeout_s: float = 8.0
+
+    def __post_init__(self) -> None:
+        for name in ("stand_s", "sit_s", "damping_kd", "damp_s", "timeout_s"):
+            value = getattr(self, name)
+            if not is_finite_real(value) or value < 0.0:
+                raise ConfigurationError(
+                    f"{name}: expected a finite number >= 0, received {value!r}")
+
+
+def damping_command(kd: float) -> MotorCommand:
+    """Pure joint damping (description order): ``kp = 0``, ``kd``, no torque, no targets."""
+    zeros = np.zeros(len(JOINT_NAMES))
+    return MotorCommand(q_des=zeros, dq_des=zeros, kp=zeros, kd=np.full(len(JOINT_NAMES), kd),
+                        tau_ff=zeros)
+
+
+def active_goals(loop: ControlLoop) -> list[GoalRecord]:
+    """The runner's goals that are running or accepted and waiting.
+
+    The runner has no public accessor for them; this reads its bookkeeping (on the ticking
+    thread only, where the runner writes it).
+    """
+    lifecycle = loop.runner._goals  # see the docstring
+    records = [] if lifecycle.active is None else [lifecycle.active]
+    return records + list(lifecycle.queue)
+
+
+class RestSequence:
+    """The start-up stand and the stop phases of one loop (see the module doc).
+
+    Call :meth:`step` on the loop's thread at the start of every tick, before the runner's
+    tick; :meth:`request_stop` from anywhere (a signal handler included: it only counts).
+    """
+
+    def __init__(self, loop: ControlLoop, settings: RestSettings | None = None) -> None:
+        self.loop = loop
+        self.settings = settings or RestSettings()
+        self.phase = Phase.RUNNING
+        #: Why the loop is stopping ('' while running).
+        self.stop_reason = ""
+        self._requests = 0
+        self._reasons: list[str] = []
+        self._stop_s = math.nan
+        self._damp_s = math.nan
+        self._canceled: set[str] = set()
+        self._notes: list[str] = []
+        self._sit: Future[ClientGoalHandle] | None = None
+        #: The start-up stand's goal handle future (``None`` if the robot was standing).
+        self.stand: Future[ClientGoalHandle] | None = None
+        self.damping = damping_command(self.settings.damping_kd)
+
+    def stand_if_down(self) -> bool:
+        """Send a ``stand`` goal if the robot's base is below standing height (once); whether
+        it was sent now."""
+        if (self.stand is not None or not self.settings.stand_on_start
+                or self.loop.context.q[2] >= STANDING_HEIGHT_M):
+            return False
+        self.stand = self.loop.client(STAND_ACTION).send_goal_async(
+            StandGoal(duration_s=self.settings.stand_s))
+        return True
+
+    def request_stop(self, reason: str) -> None:
+        """Ask the loop to come to rest (a second request: damp now). Any thread."""
+        self._reasons.append(reason)
+        self._requests += 1
+
+    def step(self, now_s: float) -> Phase:
+        """Advance the phases at robot time ``now_s`` [s]; return the current one."""
+        requests = self._requests
+        if requests and self.phase is Phase.RUNNING:
+            self.stop_reason = self._reasons[0]
+            self._stop_s = now_s
+            self.phase = Phase.UNWINDING
+        if requests > 1 and self.phase < Phase.DAMPING:
+            self._enter_damping(now_s, f"second stop request ({self._reasons[1]})")
+        if self.phase in (Phase.UNWINDING, Phase.SITTING) and (
+                now_s - self._stop_s > self.settings.timeout_s):
+            self._enter_damping(now_s, f"not at rest within {self.settings.timeout_s:g} s")
+        if self.phase is Phase.UNWINDING:
+            self._unwind()
+        if self.phase is Phase.SITTING:
+            self._sitting(now_s)
+        if self.phase is Phase.DAMPING and now_s - self._damp_s >= self.settings.damp_s:
+            self.phase = Phase.DONE
+        return self.phase
+
+    @property
+    def notes(self) -> list[str]:
+        """What the stop did, in order (for the exit summary)."""
+        return list(self._notes)
+
+    def _note(self, text: str) -> None:
+        self._notes.append(text)
+
+    def _unwind(self) -> None:
+        goals = active_goals(self.loop)
+        for record in goals:
+            if record.goal_id not in self._canceled:
+                self._canceled.add(record.goal_id)
+                self._note(f"canceled {record.label}")
+                self.loop.runner.submit_cancel(record)
+        if not goals:
+            self._sit = self.loop.client(SIT_ACTION).send_goal_async(
+                SitGoal(duration_s=self.settings.sit_s))
+            self.phase = Phase.SITTING
+
+    def _sitting(self, now_s: float) -> None:
+        future = self._sit
+        if future is None or not future.done():
+            return
+        handle = future.result()
+        if not handle.accepted:  # a goal came first: cancel it, then sit again
+            self.phase = Phase.UNWINDING
+            self._unwind()
+            return
+        if handle.status.is_terminal:
+            self._note(f"sit ended {handle.status.name}")
+            self._enter_damping(now_s, "at rest")
+
+    def _enter_damping(self, now_s: float, why: str) -> None:
+        self._note(f"damping ({why})")
+        self.phase = Phase.DAMPING
+        self._damp_s = now_s
+        self.loop.runner.shutdown(now_s)

@@ -1,0 +1,71 @@
+"""``--dds``, ``--domain``, ``--interface``: the options of the ``go2-wbc`` commands that talk to
+a robot (or the simulator bridge) over DDS, and the check that no simulation option comes with
+them."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from wbc.core.errors import ConfigurationError
+from wbc.robot_io.dds.domain_config import MAX_DOMAIN_ID, check_interface
+
+#: The defaults: the simulator's convention (unitree_mujoco, ``go2-wbc bridge``). A real GO2
+#: is domain 0 on the interface of its Ethernet link.
+DEFAULT_DOMAIN, DEFAULT_INTERFACE = 1, "lo"
+#: Options a command keeps with ``--dds`` (the rest simulate, and are refused).
+DDS_KEEPS = frozenset({
+    "help", "action", "type", "goal", "feedback", "timeout", "height", "hold", "dds", "domain",
+    "interface", "server_timeout"})
+
+
+def domain_id(text: str) -> int:
+    """An argparse type: a DDS domain id in ``[0, MAX_DOMAIN_ID]``."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= MAX_DOMAIN_ID:
+        raise argparse.ArgumentTypeError(
+            f"expected a DDS domain id in [0, {MAX_DOMAIN_ID}] (a GO2: 0; the simulator "
+            f"bridge: {DEFAULT_DOMAIN}), received {text!r}")
+    return value
+
+
+def interface(text: str) -> str:
+    """An argparse type: a network interface of this host (the message lists them)."""
+    try:
+        return check_interface(text)
+    except ConfigurationError as err:
+        raise argparse.ArgumentTypeError(str(err).removeprefix("interface: ")) from None
+
+
+def add_dds_options(group: Any, *, flag_help: str | None) -> None:
+    """``--domain`` and ``--interface`` (and ``--dds`` with ``flag_help``) on ``group``."""
+    if flag_help is not None:
+        group.add_argument("--dds", action="store_true", help=flag_help)
+    group.add_argument("--domain", type=domain_id, default=DEFAULT_DOMAIN, metavar="ID",
+                       help=f"DDS domain id, 0 to {MAX_DOMAIN_ID} (default: {DEFAULT_DOMAIN}, "
+                            "the simulator bridge's; a real GO2: 0)")
+    group.add_argument("--interface", type=interface, default=DEFAULT_INTERFACE,
+                       metavar="NAME",
+                       help=f"network interface of the domain (default: {DEFAULT_INTERFACE}; a "
+                            "real GO2: the interface of its Ethernet link, e.g. eth0 or enp3s0)")
+
+
+def check_dds_options(args: argparse.Namespace) -> None:
+    """With ``--dds``: refuse every option that only a simulation uses (a usage error naming
+    it); without: refuse ``--domain``/``--interface`` given alone."""
+    parser: argparse.ArgumentParser = args.parser
+    if not args.dds:
+        for dest, flag in (("domain", "--domain"), ("interface", "--interface")):
+            if getattr(args, dest) != parser.get_default(dest):
+                parser.error(f"{flag}: only used with --dds")
+        return
+    for action in parser._actions:  # argparse keeps its options there
+        dest = action.dest
+        if dest in DDS_KEEPS or not action.option_strings:
+            continue
+        if getattr(args, dest, action.default) != action.default:
+            parser.error(f"{action.option_strings[-1]}: a simulation option, not used with "
+                         "--dds (the robot on DDS is not simulated here)")

@@ -1,0 +1,220 @@
+"""``go2-wbc run --dds``: the whole-body controller of a GO2 (or of the simulator bridge) on DDS.
+
+It waits for the robot's first ``rt/lowstate``, builds the state estimator, the controller,
+the control loop and the DDS action servers, stands the robot up if it is down, and runs on the
+wall clock (:class:`~actions.robot.realtime_loop.RealtimeLoop`) until Ctrl-C, SIGTERM or
+``--duration``: then it cancels the running goal, sits the robot down and damps the motors
+before it exits (a second Ctrl-C damps at once). It prints a status line a second and a
+summary; ``--report`` and ``--log`` keep the figures and the per-tick arrays. ``--dry-run``
+reads the robot and prints what it would send, publishing nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import IO, Any
+
+from sim.cli.arg_types import estimator_param, float_in, output_file
+from sim.cli.dds_options import add_dds_options
+from sim.cli.exit_codes import (
+    EXIT_CODES_HELP,
+    EXIT_INTERRUPTED,
+    EXIT_SUCCEEDED,
+    EXIT_UNAVAILABLE,
+    EXIT_USAGE,
+)
+from wbc.core.errors import ConfigurationError
+from wbc.estimation.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
+from wbc.robot_io.unitree_sdk import SDK_LEG_MOTORS
+
+#: Control rates [Hz] the command runs at (the GO2's usual low-level rate first).
+RATES_HZ = (500, 1000)
+#: Default longest wait [s] for the robot's first state.
+WAIT_S = 5.0
+
+RUN_HELP = """\
+examples:
+  go2-wbc bridge &                          # the simulated GO2 on DDS (domain 1, lo)
+  go2-wbc run --dds                         # its controller; Ctrl-C brings it to rest
+  go2-wbc high-five --dds                   # a goal to it, from another terminal
+  go2-wbc run --dds --dry-run --duration 5  # read the robot, print what would be sent
+  go2-wbc run --dds --domain 0 --interface eth0 --report run.json --log run.npz
+
+a real GO2 needs domain 0 on the interface of its Ethernet link, sport mode released first
+(Unitree's MotionSwitcher), a hoist for the first tests, and a --dry-run before anything.
+
+"""
+
+
+def add_run_command(sub: Any) -> None:
+    """Add ``run`` to the ``go2-wbc`` subcommands."""
+    run = sub.add_parser(
+        "run", help="run the whole-body controller of a robot on DDS (go2-wbc run --dds)",
+        description="Run the whole-body controller and the action servers of a GO2 (or of\n"
+                    "'go2-wbc bridge') over DDS, on the wall clock, until Ctrl-C.",
+        epilog=RUN_HELP + EXIT_CODES_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    dds = run.add_argument_group("robot")
+    add_dds_options(dds, flag_help="control a robot over DDS (required, no default: the "
+                                   "simulated robot runs with the goal commands, or as "
+                                   "'go2-wbc bridge')")
+    dds.add_argument("--control-rate", type=int, choices=RATES_HZ, default=RATES_HZ[0],
+                     metavar="HZ", help=f"control rate [Hz]: {' or '.join(map(str, RATES_HZ))} "
+                                        f"(default: {RATES_HZ[0]}, the GO2's usual)")
+    dds.add_argument("--dry-run", action="store_true",
+                     help="read the robot and print what would be sent; publish no command "
+                          "(default: publish)")
+    dds.add_argument("--wait", type=float_in(0.1, 600.0, what="a wait", unit="s", fmt="g"),
+                     default=WAIT_S, metavar="S",
+                     help=f"longest wait for the robot's first state [s] (default: {WAIT_S:g})")
+    dds.add_argument("--duration", type=float_in(0.01, 1e6, what="a duration", unit="s",
+                                                 fmt="g"),
+                     metavar="S", help="come to rest and exit after this many seconds "
+                                       "(default: run until Ctrl-C)")
+    dds.add_argument("--no-stand", action="store_true",
+                     help="do not stand a robot that is down at the start (default: stand it)")
+    dds.add_argument("--no-align", action="store_true",
+                     help="tick on the loop's own deadlines only (default: move them to the "
+                          "robot's state arrivals, waiting up to 0.5 ms a tick: the command "
+                          "then answers each state within about the tick's own time)")
+    dds.add_argument("--stale-after", type=float_in(0.001, 1.0, what="a time", unit="s",
+                                                    fmt="g"),
+                     metavar="S", help="send the safe command after this long without a fresh "
+                                       "state [s] (default: the estimator's trust_timeout_s)")
+    dds.add_argument("--estimator", choices=tuple(ESTIMATORS), default=DEFAULT_ESTIMATOR,
+                     help=f"the state estimator (default: {DEFAULT_ESTIMATOR})")
+    dds.add_argument("--estimator-param", type=estimator_param, action="append", default=[],
+                     metavar="NAME=VALUE", help="change one estimator parameter, repeatable "
+                                               "(default: the estimator's values)")
+    out = run.add_argument_group("outputs")
+    out.add_argument("--report", type=output_file(".json"), metavar="FILE.json",
+                     help="write the run's figures: rate, deadline misses, per-stage tick "
+                          "times, the robot's counters, the goals' ends (default: none)")
+    out.add_argument("--log", type=output_file(".npz"), metavar="FILE.npz",
+                     help="write per-tick arrays (actions.robot.tick_log: the state tick "
+                          "answered, the estimate, status, foot targets, stage times; "
+                          "default: none)")
+    run.set_defaults(run=run_dds, parser=run)
+
+
+def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
+    """``go2-wbc run --dds``; returns the exit status."""
+    if not args.dds:
+        args.parser.error("--dds: required ('run' drives a robot over DDS; the simulated "
+                          "robot: go2-wbc high-five, stand, ..., or go2-wbc bridge)")
+    from actions.dds.dds_action_bridge import DdsActionBridge
+    from actions.robot.control_loop import ControlLoop
+    from actions.robot.dds_robot import DdsRobot, NoRobotStateError
+    from actions.robot.realtime_loop import DEFAULT_ALIGN_S, RealtimeLoop, stop_on_signals
+    from actions.robot.rest_sequence import RestSettings
+    from actions.robot.tick_log import TickLog
+    from sim.episode_runner import startup_objects_frozen
+    from wbc.controller.whole_body_controller import WholeBodyController
+    from wbc.estimation.estimators import make_estimator
+
+    out = stream or sys.stdout
+
+    def say(text: str) -> None:
+        out.write(text + "\n")
+        out.flush()
+
+    period_s = 1.0 / args.control_rate
+    robot = bridge = None
+    try:
+        try:
+            estimator = make_estimator(args.estimator, control_period_s=period_s,
+                                       **dict(args.estimator_param))
+        except ConfigurationError as err:
+            args.parser.error(f"--estimator-param: {err}")
+        robot = DdsRobot(domain_id=args.domain, interface=args.interface, dry_run=args.dry_run)
+        say(f"waiting for rt/lowstate on DDS domain {args.domain} (interface "
+            f"{args.interface})...")
+        try:
+            robot.wait_for_first_state(args.wait)
+        except NoRobotStateError as err:
+            print(f"go2-wbc: {err}", file=sys.stderr)
+            return EXIT_UNAVAILABLE
+        loop = ControlLoop(robot, WholeBodyController(control_period_s=period_s),
+                           estimator=estimator)
+        bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
+        rt = RealtimeLoop(loop, rate_hz=args.control_rate, bridge=bridge,
+                          stale_after_s=args.stale_after,
+                          align_s=0.0 if args.no_align else DEFAULT_ALIGN_S,
+                          rest=RestSettings(stand_on_start=not args.no_stand))
+        log = TickLog() if args.log is not None else None
+        if log is not None:
+            rt.callbacks.append(log.record)
+        rt.callbacks.append(_StatusPrinter(say, dry_run=args.dry_run))
+        say(f"controlling at {args.control_rate} Hz; actions served: "
+            f"{', '.join(bridge.action_names)}"
+            + (" (DRY RUN: no command is published)" if args.dry_run else "")
+            + "; Ctrl-C to bring the robot to rest and exit")
+        rt.start()
+        if rt.rest.stand is not None:
+            say(f"the robot is down (base at {loop.context.q[2]:.3f} m): standing it up"
+                + (" (dry run: printed, not sent)" if args.dry_run else ""))
+        with startup_objects_frozen(), stop_on_signals(rt):
+            rt.run(duration_s=args.duration)
+        report = rt.report()
+        say(_summary(report))
+        if args.report is not None:
+            args.report.write_text(json.dumps(report, indent=2, default=str) + "\n")
+            say(f"report: {args.report}")
+        if log is not None:
+            log.save(args.log, rt)
+            say(f"log: {args.log} ({len(log)} ticks)")
+        return EXIT_INTERRUPTED if rt.rest.stop_reason.startswith("SIG") else EXIT_SUCCEEDED
+    except ConfigurationError as err:
+        print(f"go2-wbc: error: {err}", file=sys.stderr)
+        return EXIT_USAGE
+    finally:
+        if bridge is not None:
+            bridge.close()
+        if robot is not None:
+            robot.close()
+
+
+class _StatusPrinter:
+    """A status line a second (and, in a dry run, the command that would be sent)."""
+
+    def __init__(self, say: Any, *, dry_run: bool) -> None:
+        self.say = say
+        self.dry_run = dry_run
+        self._next_s = 1.0
+
+    def __call__(self, rt: Any) -> None:
+        now = rt.loop.robot.time_s
+        if now < self._next_s:
+            return
+        self._next_s = now + 1.0
+        self.say(rt.status_line())
+        robot = rt.loop.robot.robot
+        if self.dry_run and robot.last_command is not None:
+            cmd = robot.last_command
+            rows = ", ".join(
+                ("q stop" if cmd.kp[k] == 0.0 else f"q {cmd.q[k]:+.3f}")
+                + f" kp {cmd.kp[k]:g} kd {cmd.kd[k]:g} tau {cmd.tau[k]:+.2f}"
+                for k in range(0, SDK_LEG_MOTORS, 3))
+            self.say(f"  would send (SDK slots 0, 3, 6, 9: FR, FL, RR, RL hips; reserve "
+                     f"{robot.answer_tick}): {rows}")
+
+
+def _summary(report: dict[str, Any]) -> str:
+    series = report["series"]
+    stages = ", ".join(f"{name} {series[name]['mean_ms']:.3f}/{series[name]['p99_ms']:.3f}"
+                       for name in ("read", "actions", "controller", "write", "bridge",
+                                    "hooks"))
+    robot = report["robot"]
+    return (f"stopped ({report['stop']['reason'] or 'done'}; "
+            f"{'; '.join(report['stop']['notes']) or 'no goal to unwind'}) after "
+            f"{report['duration_s']:.1f} s: {report['ticks']} ticks at {report['rate_hz']:g} Hz, "
+            f"{report['deadline_misses']} deadline misses, {report['no_fresh_state_ticks']} "
+            f"ticks without a fresh state, {report['watchdog_trips']} watchdog trips; "
+            f"robot: {robot.get('ticks_skipped', 0)} state ticks skipped, "
+            f"{robot.get('bad_frames', 0)} bad frames, {robot.get('commands_sent', 0)} "
+            f"commands\n  tick [ms] mean/p99: {stages}; whole tick "
+            f"{series['tick']['mean_ms']:.3f}/{series['tick']['p99_ms']:.3f}, cpu "
+            f"{series['cpu']['mean_ms']:.3f}/{series['cpu']['p99_ms']:.3f}, latency "
+            f"{series['latency']['mean_ms']:.3f}/{series['latency']['p99_ms']:.3f}, wake "
+            f"{series['wake']['mean_ms']:.3f}/{series['wake']['p99_ms']:.3f}")
