@@ -4,19 +4,27 @@ Definitions (``tick`` is the ``LowState_.tick`` the bridge publishes, +1 a messa
 echoes the tick of the state its command answers in ``LowCmd_.reserve``):
 
 - ``states_published``: ``LowState_`` messages written (one ``rt/wbc/sim/truth`` each).
-- ``commands_received``: valid DDS samples taken from ``rt/lowcmd``, good or bad; equal to
-  ``applied + rejected + superseded + in_flight``.
+- ``commands_received``: valid DDS samples taken from ``rt/lowcmd`` by the physics steps,
+  good or bad; equal to ``applied + rejected + superseded + in_flight``. With the
+  controller's ``commands_sent`` (its ``commands_unmatched`` went to no reader): ``sent -
+  unmatched = received + after_stop + lost``, where ``lost`` is what the wire really lost
+  (or, when ``command_history_full`` is not 0, what a full reader overwrote).
 - ``commands_applied``: handed to the motor drivers (after any simulated delay).
 - ``commands_rejected``: dropped, by reason: ``head``, ``level_flag``, ``crc`` (what the robot
   checks, :func:`wbc.robot_io.dds.low_cmd_conversion.low_cmd_fault`), ``motor_cmd`` (values a
   driver refuses: a mode other than 0x00/0x01, a negative or non-finite gain or target, a
   stop sentinel under a gain, a feed-forward torque beyond the effort limit) and ``frame``
   (bytes that do not decode as a ``LowCmd_``).
-- ``commands_superseded``: valid, but a newer one came in the same physics step.
+- ``commands_superseded``: valid, but a newer one came in the same physics step (a robot's
+  KeepLast 1 reader would have overwritten it): never applied, not lost.
+- ``commands_after_stop``: taken when the bridge closed, after its last physics step.
+- ``command_history_full``: physics steps that found the reader's whole history pending
+  (:data:`sim.dds_bridge.COMMAND_HISTORY`): older commands may have been overwritten unseen.
 - ``replies_lost``: ticks no valid command answered, between two that one did: for
-  consecutive valid commands answering ticks ``a`` then ``b > a``, ``b - a - 1``. Counts a
-  state the controller skipped and a reply lost or overwritten on the way alike; states after
-  the last answered one are not counted (they may still be answered).
+  consecutive valid commands answering ticks ``a`` then ``b > a``, ``b - a - 1``: the states
+  no command that arrived answered (every command that arrives is seen, superseded ones
+  too). A state the controller skipped (two arrived within one of its ticks) is one; states
+  after the last answered one are not counted (they may still be answered).
 - ``replies_repeated``: valid commands answering a tick no newer than the previous one's.
 - ``replies_unmatched``: valid commands whose ``reserve`` is no tick of the last
   :data:`RING_TICKS` published (a controller that does not echo sends 0): no latency.
@@ -89,6 +97,8 @@ class BridgeStats:
         self.commands_applied = 0
         self.commands_superseded = 0
         self.commands_in_flight = 0
+        self.commands_after_stop = 0
+        self.command_history_full = 0
         #: Rejected commands by reason, and the last message of each reason.
         self.commands_rejected: dict[str, int] = {}
         self.last_rejection: dict[str, str] = {}
@@ -166,6 +176,8 @@ class BridgeStats:
             "last_rejection": dict(self.last_rejection),
             "commands_superseded": self.commands_superseded,
             "commands_in_flight": self.commands_in_flight,
+            "commands_after_stop": self.commands_after_stop,
+            "command_history_full": self.command_history_full,
             "replies_lost": self.replies_lost,
             "replies_repeated": self.replies_repeated,
             "replies_unmatched": self.replies_unmatched,
@@ -190,7 +202,11 @@ class BridgeStats:
         lines.append(
             f"commands received {self.commands_received}, applied {self.commands_applied}, "
             f"rejected {rejected}" + (f" ({reasons})" if reasons else "")
-            + f", superseded {self.commands_superseded}; replies lost {self.replies_lost}, "
+            + f", superseded {self.commands_superseded}, after the stop "
+            f"{self.commands_after_stop}" + (
+                f" (reader history full {self.command_history_full} times: some may have "
+                "been overwritten unseen)" if self.command_history_full else "")
+            + f"; replies lost {self.replies_lost} (states no command answered), "
             f"repeated {self.replies_repeated}, unmatched {self.replies_unmatched}; "
             f"timeouts to damping {self.timeouts}")
         for reason, message in sorted(self.last_rejection.items()):

@@ -18,10 +18,14 @@ The wire, as the robot has it:
   low-level commands); ``motor_state[k].mode = 0x01`` for the 12 leg motors (their drivers
   are on, running the stand PD, the command or the damping) and 0x00 for slots 12 to 19.
   Writer: Reliable (100 ms max blocking) KeepLast 1, unitree_sdk2's.
-- ``rt/lowcmd`` (``LowCmd_``): read BestEffort KeepLast 1 like unitree_sdk2's readers.
-  Every physics step (1 kHz) takes whatever is pending, without blocking, and keeps the
-  newest valid command; a command with a bad ``head``, ``level_flag`` or CRC, or motor
-  values a driver refuses, is dropped and counted by reason (:mod:`sim.bridge_stats`).
+- ``rt/lowcmd`` (``LowCmd_``): read BestEffort like unitree_sdk2's readers. Every physics
+  step (1 kHz) takes whatever is pending, without blocking, and applies the newest command
+  if it is valid, as a robot whose KeepLast 1 reader holds only the newest would. The reader
+  keeps :data:`COMMAND_HISTORY` samples, not 1, so that every command that arrives is
+  counted: one overtaken by a newer within the same step (which a KeepLast 1 reader would
+  overwrite unseen) is counted as superseded, not lost. A command with a bad ``head``,
+  ``level_flag`` or CRC, or motor values a driver refuses, is dropped and counted by reason
+  (:mod:`sim.bridge_stats`); commands still pending when the bridge closes are counted too.
   Slots 0 to 11 are mapped to the plant's motors by joint name; the plant's actuators are in
   the SDK's order, as the messages are. What the drivers apply, before the first command
   and when commands stop, is :class:`sim.command_slot.CommandSlot`'s.
@@ -65,7 +69,11 @@ from wbc.robot_io.dds.c_layout import LEVEL_FLAG_LOW, LOW_STATE_DTYPE, zero_reco
 from wbc.robot_io.dds.cdr_codec import FrameError
 from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
-from wbc.robot_io.dds.low_cmd_conversion import low_cmd_fault, sdk_command_from_low_cmd
+from wbc.robot_io.dds.low_cmd_conversion import (
+    low_cmd_fault,
+    motor_command_from_low_cmd,
+    sdk_command_from_low_cmd,
+)
 from wbc.robot_io.dds.low_state_conversion import low_state_from_sensor_record
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
 from wbc.robot_io.motor_command import MotorCommand
@@ -74,8 +82,10 @@ from wbc.robot_io.unitree_sdk import MODE_ENABLE, SDK_LEG_MOTORS
 
 #: Physics steps the loop may fall behind the clock before it resynchronises (an overrun).
 MAX_LAG_STEPS = 3
-#: Samples taken from ``rt/lowcmd`` at most per physics step (its history keeps one).
-_TAKE_AT_ONCE = 8
+#: Samples the ``rt/lowcmd`` reader holds and a physics step takes at most: 16 ms of commands
+#: at 1 kHz. A step that finds it full counts it (``command_history_full``): older ones may
+#: have been overwritten unseen.
+COMMAND_HISTORY = 16
 #: What each mode change says (:attr:`DdsBridge.on_event`).
 _TRANSITIONS = {
     ("stand", COMMAND): "first valid command: the controller drives the motors",
@@ -118,6 +128,9 @@ class DdsBridge:
         self._joint_names = self.sim.actuator_map.other_names
         self._to_plant = self.sim.actuator_map.index  # description -> plant order, by name
         self._to_description = self.sim.actuator_map.inverse
+        #: The SDK motor slot of each plant actuator, by joint name.
+        self._slots = np.array([UNITREE_SDK_JOINT_NAMES.index(name)
+                                for name in self._joint_names], dtype=np.intp)
         self._sensors = SimulatedSensors(self.sim, config.sensor_model, seed=config.sensor_seed,
                                          leg_order=LEGS)
         pose_q = self.sim.description.pose(config.pose)[7:]
@@ -175,10 +188,12 @@ class DdsBridge:
             try:
                 participant = dds.participant
                 # unitree_sdk2's channels: writers Reliable (100 ms) KeepLast 1, readers
-                # BestEffort KeepLast 1 (a Reliable writer matches both kinds of reader).
+                # BestEffort (a Reliable writer matches both kinds of reader); the command
+                # reader keeps a few, to count every command (the module docstring).
                 writer_qos = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
                                  Policy.History.KeepLast(1))
-                reader_qos = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1))
+                reader_qos = Qos(Policy.Reliability.BestEffort,
+                                 Policy.History.KeepLast(COMMAND_HISTORY))
                 self._cmd_reader = DataReader(
                     participant, _topic(participant, LOW_CMD_TOPIC, LowCmdMessage),
                     qos=reader_qos)
@@ -201,8 +216,9 @@ class DdsBridge:
         self._stop.set()
 
     def close(self) -> None:
-        """Stop the loop, close the viewer, delete the readers, writers and participant;
-        idempotent. From another thread, waits for the loop's current step."""
+        """Stop the loop, close the viewer, count the commands still pending (never applied),
+        delete the readers, writers and participant; idempotent. From another thread, waits
+        for the loop's current step."""
         self._stop.set()
         with self._lock:
             self._closed = True
@@ -212,6 +228,7 @@ class DdsBridge:
             dds, self._dds = self._dds, None
             entities, self._entities = self._entities, ()
             if dds is not None:
+                self._count_pending()
                 delete_entities(*entities)
                 dds.close()
 
@@ -306,31 +323,46 @@ class DdsBridge:
             self.truth_log.append(truth)
 
     def _take_commands(self, now_s: float) -> MotorCommand | None:
-        """Every pending ``LowCmd_``, checked and counted; the newest valid one."""
+        """Every pending ``LowCmd_``, checked and counted; the newest one if it is valid (a
+        robot's KeepLast 1 reader holds only that one): older valid ones are superseded."""
         stats = self.stats
         try:
-            samples = self._cmd_reader.take(N=_TAKE_AT_ONCE)
+            samples = self._cmd_reader.take(N=COMMAND_HISTORY)
         except FrameError as err:  # bytes that do not decode; taken from the reader anyway
             stats.commands_received += 1
             self._reject("frame", str(err))
             return None
+        stats.command_history_full += len(samples) == COMMAND_HISTORY
         newest = None
         for sample in samples:
             info = sample.sample_info
             if info is None or not info.valid_data:  # a writer went away: no data
                 continue
             stats.commands_received += 1
-            command = self._checked(sample.record)
-            if command is None:
-                continue
             stats.commands_superseded += newest is not None
-            newest = command
-            stats.replied(int(sample.record["reserve"]), now_s, info.source_timestamp)
+            newest = self._checked(sample.record)
+            if newest is not None:
+                stats.replied(int(sample.record["reserve"]), now_s, info.source_timestamp)
         return newest
+
+    def _count_pending(self) -> None:
+        """Count the commands that came after the last physics step (never applied)."""
+        try:
+            samples = self._cmd_reader.take(N=COMMAND_HISTORY)
+        except FrameError:
+            samples = [None]
+        self.stats.commands_after_stop += sum(
+            sample is None or (sample.sample_info is not None and sample.sample_info.valid_data)
+            for sample in samples)
 
     def _checked(self, record: np.ndarray) -> MotorCommand | None:
         """The command a driver would take from ``record`` (plant order), or ``None``
-        (rejected and counted)."""
+        (rejected and counted). Checked compiled first; a refused one again the slow way,
+        which names the reason."""
+        command = motor_command_from_low_cmd(record, slots=self._slots,
+                                             effort_limit=self.sim.effort_limit)
+        if command is not None:
+            return command
         fault = low_cmd_fault(record)
         if fault is not None:  # "LowCmd_.crc: expected ..."
             self._reject(fault.partition(":")[0].removeprefix("LowCmd_."), fault)

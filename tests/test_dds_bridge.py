@@ -274,6 +274,36 @@ def test_a_valid_command_drives_a_joint(connected) -> None:
     assert stats.latency.summary()["count"] == stats.commands_applied - stats.replies_unmatched
 
 
+def test_every_command_that_arrives_is_counted_once(connected) -> None:
+    bridge, clock, peer = connected
+    step(bridge, clock)  # publishes tick 1
+    stats = bridge.stats
+    # Two within one physics step: the newest is applied, the older superseded (a robot's
+    # KeepLast 1 reader would have overwritten it), both answer tick 1.
+    peer.cmd.write(low_cmd(STAND_SDK, reply_tick=1))
+    peer.cmd.write(low_cmd(CROUCH_SDK, reply_tick=1))
+    step(bridge, clock)
+    assert (stats.commands_received, stats.commands_superseded, stats.commands_applied) == (
+        2, 1, 1)
+    np.testing.assert_allclose(bridge.slot.command.q_des, CROUCH_SDK, atol=1e-6)
+    # A valid one overtaken by a bad one: nothing new is applied, as on the robot.
+    peer.cmd.write(low_cmd(STAND_SDK, reply_tick=1))
+    peer.cmd.write(low_cmd(STAND_SDK, reply_tick=1, fault="crc"))
+    step(bridge, clock)
+    assert (stats.commands_received, stats.commands_superseded, stats.commands_applied) == (
+        4, 2, 1)
+    assert stats.commands_rejected == {"crc": 1}
+    np.testing.assert_allclose(bridge.slot.command.q_des, CROUCH_SDK, atol=1e-6)
+    assert (stats.replies_lost, stats.replies_repeated) == (0, 2)
+    # Still pending when the bridge closes: counted, never applied.
+    for _ in range(3):
+        peer.cmd.write(low_cmd(STAND_SDK, reply_tick=1))
+    bridge.close()
+    assert (stats.commands_received, stats.commands_after_stop) == (4, 3)
+    assert stats.command_history_full == 0
+    assert stats.as_dict()["commands_after_stop"] == 3
+
+
 @pytest.mark.parametrize("fault", ["crc", "head", "level_flag", "motor_cmd"])
 def test_a_bad_frame_is_dropped_counted_and_moves_nothing(connected, fault) -> None:
     bridge, clock, peer = connected

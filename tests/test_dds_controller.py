@@ -23,10 +23,16 @@ from cyclonedds.topic import Topic
 
 from actions.go2.go2_interfaces import HIGH_FIVE, HighFiveGoal
 from actions.goal_status import GoalStatus
+from actions.robot import dds_robot as dds_robot_module
 from actions.robot.control_loop import ControlLoop
-from actions.robot.dds_robot import DdsRobot, NoRobotStateError
+from actions.robot.dds_robot import DdsRobot, DdsRobotCounters, NoRobotStateError
 from actions.robot.deadline_clock import DeadlineClock
-from actions.robot.realtime_loop import RealtimeLoop, stop_on_signals
+from actions.robot.realtime_loop import (
+    ALIGN_FOLLOW_S,
+    ALIGN_STEP_S,
+    RealtimeLoop,
+    stop_on_signals,
+)
 from actions.robot.rest_sequence import Phase
 from actions.robot.robot_interface import RobotWrapper
 from actions.robot.tick_log import TickLog
@@ -206,6 +212,36 @@ def test_a_command_it_cannot_carry_is_refused_not_published(go2, robot):
         [JOINT_NAMES.index(name) - 6.0 for name in UNITREE_SDK_JOINT_NAMES])
     assert robot.counters.commands_refused == 1 and robot.counters.commands_sent == 1
     assert "tau" in robot.last_fault
+
+
+def test_commands_written_before_the_robots_reader_matched_are_counted_apart(robot):
+    robot.write_command(command())  # nobody reads rt/lowcmd yet: it goes nowhere
+    assert (robot.counters.commands_sent, robot.counters.commands_unmatched) == (1, 1)
+    fake = FakeGo2()
+    try:
+        matched(fake, robot)
+        robot.write_command(command())
+        assert (robot.counters.commands_sent, robot.counters.commands_unmatched) == (2, 1)
+        assert len(received_commands(fake)) == 1
+    finally:
+        fake.close()
+
+
+def test_the_first_state_wait_logs_a_robot_without_a_command_reader(robot, monkeypatch,
+                                                                    caplog):
+    monkeypatch.setattr(dds_robot_module, "MATCH_WAIT_S", 0.05)
+    dds = join_domain("lo", domain_id=DOMAIN)
+    participant = dds.participant
+    writer = DataWriter(participant, Topic(participant, LOW_STATE_TOPIC, LowStateMessage))
+    try:
+        wait_until(lambda: writer.get_publication_matched_status().current_count > 0,
+                   "the state writer to match")
+        writer.write(LowStateMessage(low_state_from_sensor_record(standing_record(5))))
+        assert robot.wait_for_first_state(WAIT_S).tick == 5
+    finally:
+        delete_entities(writer)
+        dds.close()
+    assert f"no reader of {LOW_CMD_TOPIC} matched 0.05 s after the first state" in caplog.text
 
 
 def test_dry_run_publishes_nothing_and_keeps_the_command(go2):
@@ -601,6 +637,7 @@ class PacedRobot(TestRobot):
         self.period_s = period_s
         self.next_s = clock.t + first_s
         self.ages_s: list[float] = []
+        self.counters = DdsRobotCounters()  # ticks_skipped, as a DdsRobot counts them
 
     def wait_for_new_state(self, timeout_s: float) -> bool:
         if self.clock.t >= self.next_s:
@@ -616,6 +653,7 @@ class PacedRobot(TestRobot):
             return None
         while self.next_s + self.period_s <= self.clock.t:  # the newest only
             self.next_s += self.period_s
+            self.counters.ticks_skipped += 1
         self.ages_s.append(self.clock.t - self.next_s)
         self.next_s += self.period_s
         return self.robot.read_sensors()
@@ -648,6 +686,39 @@ def test_the_ticks_find_the_states_arrival_and_follow_it(first_s):
     assert rt.stats.no_fresh_state <= 1 and rt.align_timeouts <= 1
     longest_wait_s = min(first_s, rt.align_s)  # the first tick's (in vain past align_s)
     assert rt.stats.summary()["align"]["max_ms"] == pytest.approx(1e3 * longest_wait_s)
+
+
+def test_a_late_state_is_answered_in_its_tick_and_barely_moves_the_deadlines():
+    rt, robot = paced_loop(period_s=PERIOD_S, first_s=0.0003)
+    for _ in range(100):
+        rt.tick()
+    assert rt.align_s == pytest.approx(0.5 * PERIOD_S)  # the default: half the period
+    no_state, start = rt.stats.no_fresh_state, len(robot.ages_s)
+    robot.next_s += 8e-4  # the next state comes 0.8 ms late (the robot's jitter)
+    rt.tick()  # waits for it: answered on arrival, not skipped for the next one
+    robot.next_s -= 8e-4  # the ones after it are on time again
+    assert 0.8 <= rt.stats.summary()["align"]["max_ms"] <= 0.8 + 1e3 * ALIGN_STEP_S + 1e-6
+    for _ in range(50):
+        rt.tick()
+    ages = robot.ages_s[start:]
+    assert rt.stats.no_fresh_state == no_state and len(ages) == 51
+    # The deadlines moved by ALIGN_FOLLOW_S (not 0.8 ms): the next states wait that long at
+    # most, and after ALIGN_FOLLOW_S / ALIGN_STEP_S = 5 ticks, a step.
+    assert max(ages) <= ALIGN_FOLLOW_S + 1e-9 and max(ages[7:]) <= ALIGN_STEP_S + 1e-9
+    assert rt.stats.misses == 0
+
+
+def test_the_states_skipped_while_running_exclude_the_start_ups():
+    rt, robot = paced_loop(period_s=PERIOD_S, first_s=0.0003)
+    robot.clock.advance(5 * PERIOD_S)  # the loop is being set up: 5 states come meanwhile
+    for _ in range(100):
+        rt.tick()
+    # The first tick read the newest of them: 4 skipped, before the loop ran.
+    assert robot.counters.ticks_skipped == 4 and rt.state_ticks_skipped == 0
+    robot.clock.advance(2.5 * PERIOD_S)  # the loop is held up: two states come meanwhile
+    for _ in range(100):
+        rt.tick()
+    assert robot.counters.ticks_skipped == 5 and rt.report()["state_ticks_skipped"] == 1
 
 
 def test_the_alignment_pauses_for_a_robot_slower_than_the_loop():

@@ -42,6 +42,7 @@ from wbc.robot_io.dds.c_layout import (
     low_state_crc,
     sdk_default_low_cmd,
     set_crc,
+    zero_record,
 )
 from wbc.robot_io.dds.cdr_codec import CdrCodec, FrameError
 from wbc.robot_io.dds.domain_config import (
@@ -63,8 +64,10 @@ from wbc.robot_io.dds.go2_types import (
 from wbc.robot_io.dds.low_cmd_conversion import (
     low_cmd_fault,
     low_cmd_from_sdk_command,
+    motor_command_from_low_cmd,
     sdk_command_from_low_cmd,
 )
+from wbc.robot_io.dds.low_cmd_frame import LowCmdFrame
 from wbc.robot_io.dds.low_state_conversion import (
     low_state_from_sensor_record,
     rpy_from_wxyz,
@@ -429,6 +432,130 @@ def test_bad_command_frames_are_named():
     with pytest.raises(FrameError, match=r"^LowCmd_\.motor_cmd\[0\.\.11\]: kd: expected gains "
                        r">= 0, received \[-1\.0\] at 2 \(FR_calf_joint\)$"):
         sdk_command_from_low_cmd(negative)
+
+
+def checked_low_cmd(command: MotorCommand, reserve: int,
+                    use_stop_sentinels: bool = True) -> np.ndarray:
+    """The record of the checked path: SdkMotorCommand, then low_cmd_from_sdk_command."""
+    record = sdk_default_low_cmd()
+    record["reserve"] = reserve
+    sdk = SdkMotorCommand.from_control_output(command, use_stop_sentinels=use_stop_sentinels)
+    return low_cmd_from_sdk_command(sdk, out=record)
+
+
+def random_command(rng: np.random.Generator) -> MotorCommand:
+    """A description-order command, some gains zero (the stop sentinels), one of them -0."""
+    kp, kd = rng.uniform(0.0, 60.0, 12), rng.uniform(0.0, 3.0, 12)
+    kp[rng.random(12) < 0.3] = 0.0
+    kd[rng.random(12) < 0.3] = 0.0
+    kp[4] = -0.0
+    return MotorCommand(q_des=rng.normal(0.0, 2.0, 12), dq_des=rng.normal(0.0, 20.0, 12),
+                        kp=kp, kd=kd, tau_ff=rng.normal(0.0, 15.0, 12))
+
+
+@pytest.mark.parametrize("use_stop_sentinels", [True, False])
+def test_low_cmd_frame_writes_the_bytes_of_the_checked_path(use_stop_sentinels):
+    rng = np.random.default_rng(21)
+    frame = LowCmdFrame(use_stop_sentinels=use_stop_sentinels)
+    for reserve in [0, 1, 41, 2**32 - 1, *rng.integers(0, 2**32, 300).tolist()]:
+        command = random_command(rng)
+        assert frame.fill(command, reserve=reserve)
+        assert frame.record.tobytes() == checked_low_cmd(
+            command, reserve, use_stop_sentinels).tobytes()
+    assert low_cmd_fault(frame.record) is None
+
+
+def test_low_cmd_frame_refuses_what_the_checked_path_refuses_and_writes_nothing():
+    frame = LowCmdFrame()
+    good = random_command(np.random.default_rng(22))
+    assert frame.fill(good, reserve=7)
+    sent = frame.record.tobytes()
+
+    def changed(field: str, index: int, value: float) -> MotorCommand:
+        bad = good.copy()
+        getattr(bad, field)[index] = value
+        return bad
+
+    bad_commands = [changed("tau_ff", 3, np.nan), changed("q_des", 0, np.inf),
+                    changed("kp", 2, -1.0), changed("kd", 11, -1e-9),
+                    changed("q_des", 5, POS_STOP_F), changed("dq_des", 6, VEL_STOP_F)]
+    bad_commands[4].kp[5] = bad_commands[5].kd[6] = 1.0  # a sentinel under a gain
+    short = good.copy()
+    short.kp = short.kp[:11]
+    for bad in [*bad_commands, short]:
+        with pytest.raises(ConfigurationError):
+            SdkMotorCommand.from_control_output(bad)
+        assert not frame.fill(bad, reserve=8)
+        assert frame.record.tobytes() == sent  # nothing written
+    # Another dtype is left to the checked path, which converts it.
+    as_float32 = MotorCommand(**{name: np.asarray(getattr(good, name), np.float32)
+                                 for name in ("q_des", "dq_des", "kp", "kd", "tau_ff")})
+    assert not frame.fill(as_float32) and frame.record.tobytes() == sent
+    SdkMotorCommand.from_control_output(as_float32)
+
+
+def spoiled_low_cmd(rng: np.random.Generator) -> tuple[np.ndarray, str]:
+    """A received-like (read-only) LowCmd_ record with, most of the time, one thing wrong."""
+    record = low_cmd_from_sdk_command(random_sdk_command(rng))
+    motors = record["motor_cmd"]
+    slot = int(rng.integers(0, 12))
+    fault = str(rng.choice(["none", "stopped motor", "mode", "nan", "gain", "sentinel", "tau",
+                            "crc", "head", "level_flag"]))
+    if fault == "stopped motor":
+        motors["mode"][slot] = 0
+    elif fault == "mode":
+        motors["mode"][slot] = 2
+    elif fault == "nan":
+        motors[str(rng.choice(["q", "dq", "tau", "kp", "kd"]))][slot] = np.nan
+    elif fault == "gain":
+        motors[str(rng.choice(["kp", "kd"]))][slot] = -0.5
+    elif fault == "sentinel":
+        motors["q"][slot] = POS_STOP_F
+        motors["kp"][slot] = 10.0
+    elif fault == "tau":
+        motors["tau"][slot] = 30.0
+    elif fault == "head":
+        record["head"][1] = 0xEE
+    elif fault == "level_flag":
+        record["level_flag"] = 0xEE
+    set_crc(record)
+    if fault == "crc":
+        record["crc"] ^= 1 << int(rng.integers(0, 32))
+    received = np.ndarray((), dtype=LOW_CMD_DTYPE, buffer=record.tobytes())  # read-only
+    return received, fault
+
+
+def checked_driver_command(record: np.ndarray, slots: np.ndarray,
+                           effort_limit: np.ndarray) -> MotorCommand | None:
+    """The checked way: the robot's checks, SdkMotorCommand, the driver's effort limits."""
+    try:
+        sdk = sdk_command_from_low_cmd(record)
+    except FrameError:
+        return None
+    command = sdk.to_motor_command().reordered(JointMap.unitree_sdk().index[slots])
+    return None if command.problems(effort_limit) else command
+
+
+def test_the_compiled_driver_command_equals_the_checked_path():
+    rng = np.random.default_rng(23)
+    slots = rng.permutation(12).astype(np.intp)  # any joint order, mapped by slot
+    effort_limit = np.full(12, 23.7)
+    seen = set()
+    for _ in range(600):
+        record, fault = spoiled_low_cmd(rng)
+        fast = motor_command_from_low_cmd(record, slots=slots, effort_limit=effort_limit)
+        checked = checked_driver_command(record, slots, effort_limit)
+        assert (fast is None) == (checked is None), fault
+        assert (fast is None) == (fault not in ("none", "stopped motor")), fault
+        seen.add(fault)
+        if fast is not None:
+            for name in ("q_des", "dq_des", "kp", "kd", "tau_ff"):
+                np.testing.assert_array_equal(getattr(fast, name), getattr(checked, name),
+                                              err_msg=f"{fault}: {name}")
+    assert len(seen) == 10
+    with pytest.raises(ConfigurationError, match="expected a 0-d NumPy array of the LowCmd_"):
+        motor_command_from_low_cmd(zero_record(LOW_STATE_DTYPE), slots=slots,
+                                   effort_limit=effort_limit)
 
 
 # --- domain configuration -------------------------------------------------------------------

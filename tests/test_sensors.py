@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
+import sim.sensors as sensors_module
 from actions.robot.robot_interface import MappedRobot
 from sim.mujoco_robot import MujocoRobot
 from sim.sensors import SENSOR_PRESETS, SensorModel, SimulatedSensors, _sample
@@ -135,6 +136,28 @@ def test_noise_has_the_preset_spread_and_the_seed_repeats_it():
     other = SimulatedSensors(sim, "go2", seed=5)
     other.sample(c)
     assert not np.array_equal(other.gyro_bias, noisy.gyro_bias)
+
+
+def test_the_noise_block_size_changes_no_value_and_a_reset_simulator_is_sampled(monkeypatch):
+    # The noise is drawn a few samples at a time (no 0.4 ms stall every 1024 samples): the
+    # same seed gives the same values in the same order as one large block would.
+    def records(block: int, samples: int = 1100) -> list[np.ndarray]:
+        monkeypatch.setattr(sensors_module, "_NOISE_BLOCK", block)
+        sim = Go2Simulator()
+        sensors, record, out = SimulatedSensors(sim, "go2", seed=7), SensorRecord.zeros(), []
+        for _ in range(samples):
+            sim.step(np.zeros(12))
+            sensors.sample(record)
+            out.append(np.concatenate([record.q, record.dq, record.tau_est,
+                                       record.gyroscope_rad_s, record.accelerometer_m_s2,
+                                       record.imu_quaternion_wxyz, record.foot_force]))
+        sim.reset("standing")  # time goes back: the sensors start again from their seed
+        sensors.sample(record)
+        assert sensors.ticks == 1
+        return out
+
+    assert np.array_equal(records(1024), records(16))
+    assert np.array_equal(records(1024), records(1))
 
 
 def attitude_errors(accel_bias, seconds: float = 20.0, tilt_start_deg: float = 0.0):

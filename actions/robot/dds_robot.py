@@ -15,7 +15,12 @@ clock: its unit differs between a GO2 and a simulator, and it restarts with the 
 Command: a Reliable, KeepLast 1 writer (unitree_sdk2's) of ``LowCmd_`` with the SDK's header,
 ``reserve`` set to the ``tick`` of the state the command answers (a bridge measures the
 state-to-command latency by it) and the CRC over all of it. A frame that would fail the
-robot's checks is never published.
+robot's checks is never published. Each command is written into one reused record by a
+compiled call (:class:`~wbc.robot_io.dds.low_cmd_frame.LowCmdFrame`, ~2 us); one it refuses
+goes through the checked path (:class:`~wbc.robot_io.sdk_motor_command.SdkMotorCommand`), which
+names the problem. A command written while no reader of ``rt/lowcmd`` is matched goes nowhere
+(before discovery matched the robot's reader, or after it left): it is counted apart
+(``commands_unmatched``), and :meth:`DdsRobot.wait_for_first_state` also waits for the match.
 """
 
 from __future__ import annotations
@@ -45,10 +50,15 @@ from cyclonedds.util import duration
 
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.model.description import JOINT_NAMES, LEGS
-from wbc.robot_io.dds.c_layout import HEAD, crc_ok, sdk_default_low_cmd
+from wbc.robot_io.dds.c_layout import HEAD, crc_ok
 from wbc.robot_io.dds.domain_config import delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
-from wbc.robot_io.dds.low_cmd_conversion import low_cmd_fault, low_cmd_from_sdk_command
+from wbc.robot_io.dds.low_cmd_conversion import (
+    low_cmd_fault,
+    low_cmd_from_sdk_command,
+    sdk_command_from_low_cmd,
+)
+from wbc.robot_io.dds.low_cmd_frame import LowCmdFrame
 from wbc.robot_io.dds.low_state_conversion import sensor_record_from_low_state
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
 from wbc.robot_io.motor_command import MotorCommand
@@ -63,6 +73,9 @@ COMMAND_QOS = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
 #: unitree_sdk2's reader: BestEffort, KeepLast 1 (only the newest state is held).
 STATE_QOS = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1))
 _TAKE_MAX = 8  # KeepLast 1 holds one; more only if a writer of another instance appeared
+#: Longest wait [s] for the robot's command reader after its first state (discovery on one
+#: host matches both ways within milliseconds).
+MATCH_WAIT_S = 1.0
 _TICK_WRAP = 1 << 32
 _HEAD = np.array(HEAD, dtype=np.uint8)
 
@@ -100,8 +113,10 @@ class DdsRobotCounters:
     bad_frames: int = 0
     #: A state whose tick is not after the last one's (robot restarted): used, counted.
     tick_restarts: int = 0
-    #: Commands published (in a dry run: built and kept).
+    #: Commands published (in a dry run: built and kept), ``commands_unmatched`` included.
     commands_sent: int = 0
+    #: Commands published while no reader of ``rt/lowcmd`` was matched: they went nowhere.
+    commands_unmatched: int = 0
     #: Commands refused (a value the SDK's command cannot carry): nothing published.
     commands_refused: int = 0
 
@@ -146,9 +161,10 @@ class DdsRobot:
         self._pending: np.ndarray | None = None  # a state taken while waiting, not yet read
         self._last_tick: int | None = None
         self._answer_tick = 0
-        self._cmd_record = sdk_default_low_cmd()
+        self._frame = LowCmdFrame()
+        self._cmd_record = self._frame.record
         self._cmd_message = LowCmdMessage(self._cmd_record)
-        self.last_command: SdkMotorCommand | None = None
+        self._built = False  # a command was built into the record
         self._lock = threading.Lock()
         self._dds = join_domain(interface, domain_id=domain_id)
         self._writer: DataWriter | None = None
@@ -181,6 +197,12 @@ class DdsRobot:
         """The ``tick`` of the newest state returned: what the next command's ``reserve``
         carries (0 before the first)."""
         return self._answer_tick
+
+    @property
+    def last_command(self) -> SdkMotorCommand | None:
+        """The last command built (published unless a dry run) as the ``LowCmd_`` carries it
+        (float32 values), ``None`` before the first."""
+        return sdk_command_from_low_cmd(self._cmd_record) if self._built else None
 
     @property
     def last_low_cmd(self) -> np.ndarray:
@@ -218,31 +240,27 @@ class DdsRobot:
         refused: nothing is published (the robot's own timeout then applies), the refusal is
         counted and logged, and the loop goes on.
         """
-        try:
-            sdk = SdkMotorCommand.from_control_output(command)
-        except ConfigurationError as err:
-            self._refuse(f"command not sent: {err}")
+        if not self._frame.fill(command, reserve=self._answer_tick) and (
+                not self._build_checked(command)):
             return
-        record = self._cmd_record
-        record["reserve"] = self._answer_tick  # before the CRC, which covers it
-        low_cmd_from_sdk_command(sdk, out=record)
-        fault = low_cmd_fault(record)
-        if fault is not None:  # never happens with the SDK's header; never publish one
-            self._refuse(f"command not sent: {fault}")
-            return
-        self.last_command = sdk
+        self._built = True
         with self._lock:
-            if self._writer is not None:
-                self._writer.write(self._cmd_message)
+            writer = self._writer
+            if writer is not None:
+                if not writer.get_publication_matched_status().current_count:
+                    self.counters.commands_unmatched += 1
+                writer.write(self._cmd_message)
         self.counters.commands_sent += 1
 
     # -- start-up and teardown --------------------------------------------------------------
 
     def wait_for_first_state(self, timeout_s: float = 5.0) -> SensorRecord:
         """Block until a valid state arrives; it is what the next :meth:`read_sensors` returns.
+        Then wait, up to :data:`MATCH_WAIT_S` more, until the robot's command reader is matched
+        (so that the first commands reach it); a robot without one is logged, not refused.
 
         Args:
-            timeout_s: Longest wait [s, wall clock].
+            timeout_s: Longest wait [s, wall clock] for the state.
 
         Raises:
             NoRobotStateError: Nothing valid in time; the message names the topic, the domain
@@ -253,6 +271,7 @@ class DdsRobot:
             record = self._take_newest()
             if record is not None:
                 self._pending = record
+                self._wait_for_command_reader(MATCH_WAIT_S)
                 return sensor_record_from_low_state(record, stamp_s=self.time_s)
             remaining = deadline - time.monotonic()
             if remaining <= 0.0:
@@ -289,6 +308,38 @@ class DdsRobot:
         self.close()
 
     # -- internals --------------------------------------------------------------------------
+
+    def _build_checked(self, command: MotorCommand) -> bool:
+        """Build ``command`` into the record the checked way (what :class:`LowCmdFrame` does
+        not take: another dtype, or a value it refuses, which this path names); whether it
+        may be published."""
+        try:
+            sdk = SdkMotorCommand.from_control_output(command)
+        except ConfigurationError as err:
+            self._refuse(f"command not sent: {err}")
+            return False
+        record = self._cmd_record
+        record["reserve"] = self._answer_tick  # before the CRC, which covers it
+        low_cmd_from_sdk_command(sdk, out=record)
+        fault = low_cmd_fault(record)
+        if fault is not None:  # never happens with the SDK's header; never publish one
+            self._refuse(f"command not sent: {fault}")
+            return False
+        return True
+
+    def _wait_for_command_reader(self, timeout_s: float) -> None:
+        """Wait until a reader of ``rt/lowcmd`` is matched, at most ``timeout_s`` [s]."""
+        writer = self._writer
+        if writer is None:
+            return
+        deadline = time.monotonic() + timeout_s
+        while not writer.get_publication_matched_status().current_count:
+            if time.monotonic() >= deadline:
+                logger.warning("DdsRobot: no reader of %s matched %g s after the first state; "
+                               "commands go nowhere until one is (counted in "
+                               "commands_unmatched)", LOW_CMD_TOPIC, timeout_s)
+                return
+            time.sleep(1e-3)
 
     def _take_newest(self) -> np.ndarray | None:
         """The newest valid state in the reader (or the one a wait took), without blocking."""

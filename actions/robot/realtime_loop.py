@@ -9,12 +9,16 @@ poll the DDS action bridge, run the hooks.
 Phase: a robot sends its states on its own clock, at the same rate. Ticking just before a
 state arrives would answer every state a period late (and miss some). So, when the robot can
 say whether a state is waiting (``wait_for_new_state``, as
-:class:`~actions.robot.dds_robot.DdsRobot` can), each tick first waits up to ``align_s`` for
-one, and the deadlines follow the states: later by the time waited, or, when a state was
+:class:`~actions.robot.dds_robot.DdsRobot` can), each tick first waits up to ``align_s`` (by
+default :data:`DEFAULT_ALIGN_SHARE` of the period) for one, and the deadlines follow the
+states: later by the time waited (at most :data:`ALIGN_FOLLOW_S` a tick), or, when a state was
 already there, earlier by :data:`ALIGN_STEP_S` to find the arrival again. The tick then starts
-within tens of microseconds of the state's arrival. A robot whose states stop or come slower
-than the loop (more than :data:`ALIGN_PAUSE_SHARE` of the waits of :data:`ALIGN_WINDOW_S` in
-vain) pauses the alignment for :data:`ALIGN_PAUSE_S`; the loop then ticks on its own deadlines.
+within tens of microseconds of the state's arrival. A state that comes late (the robot's own
+jitter) is still answered in its tick, on arrival, instead of being overtaken by the next one
+and skipped; it moves the grid by :data:`ALIGN_FOLLOW_S` only, so the states after it, on time
+again, are not answered late. A robot whose states stop or come slower than the loop (more
+than :data:`ALIGN_PAUSE_SHARE` of the waits of :data:`ALIGN_WINDOW_S` in vain) pauses the
+alignment for :data:`ALIGN_PAUSE_S`; the loop then ticks on its own deadlines.
 
 Staleness: the estimator already distrusts a robot that sends nothing (``trust_timeout_s`` of
 ticks without a sample: the loop sends the controller's safe command with the reason, the
@@ -47,10 +51,16 @@ if TYPE_CHECKING:
 
 #: The watchdog's limit [s] when the estimator has no ``trust_timeout_s``.
 DEFAULT_STALE_AFTER_S = 0.01
-#: Longest wait [s] for the robot's state after a deadline (a quarter of a 500 Hz period).
+#: A fixed wait [s] for the robot's state after a deadline (a quarter of a 500 Hz period).
 DEFAULT_ALIGN_S = 5e-4
+#: The default wait for the robot's state after a deadline, as a share of the period: a late
+#: state is still answered in its tick, which then ends within the period.
+DEFAULT_ALIGN_SHARE = 0.5
 #: How much earlier [s] the next deadline is when the state was there before this one.
 ALIGN_STEP_S = 2e-5
+#: The most [s] the deadlines move later in one tick to follow a state that came during the
+#: wait (a late one moves them no more: jitter, not a new phase).
+ALIGN_FOLLOW_S = 1e-4
 #: Share of the ticks of :data:`ALIGN_WINDOW_S` [s] whose wait for a state may end in vain
 #: before the alignment pauses for :data:`ALIGN_PAUSE_S` [s] (a robot slower than the loop,
 #: or silent: each vain wait idles ``align_s`` of the period).
@@ -69,7 +79,8 @@ class RealtimeLoop:
         bridge: A DDS action bridge to poll each tick (not also as a loop hook).
         stale_after_s: The watchdog's limit [s] without a fresh state (see the module doc).
         align_s: Longest wait [s] for the robot's state after each deadline (see the module
-            doc); 0 ticks on the deadlines alone.
+            doc); 0 ticks on the deadlines alone; ``None``: :data:`DEFAULT_ALIGN_SHARE` of
+            the period.
         rest: How the robot is stood up at the start and brought to rest at the end.
         clock, sleep, spin_s: The deadlines' clock, sleep and spin (see
             :class:`~actions.robot.deadline_clock.DeadlineClock`); injectable for tests.
@@ -83,7 +94,7 @@ class RealtimeLoop:
 
     def __init__(self, loop: ControlLoop, *, rate_hz: float = 500.0, bridge: Any = None,
                  stale_after_s: float | None = None, rest: RestSettings | None = None,
-                 align_s: float = DEFAULT_ALIGN_S,
+                 align_s: float | None = None,
                  clock: Callable[[], float] = time.monotonic,
                  sleep: Callable[[float], None] = time.sleep, spin_s: float = DEFAULT_SPIN_S,
                  timer: Callable[[], float] = time.perf_counter,
@@ -105,6 +116,8 @@ class RealtimeLoop:
         if not is_finite_real(stale_after_s) or stale_after_s <= 0.0:
             raise ConfigurationError(
                 f"stale_after_s: expected seconds > 0, received {stale_after_s!r}")
+        if align_s is None:
+            align_s = DEFAULT_ALIGN_SHARE / rate_hz
         if not is_finite_real(align_s) or not 0.0 <= align_s < 1.0 / rate_hz:
             raise ConfigurationError(
                 f"align_s: expected seconds in [0, the period {1.0 / rate_hz:g}), received "
@@ -144,6 +157,10 @@ class RealtimeLoop:
         self._stale = False
         self._started = False
         self._status_mark = (math.nan, 0, 0, 0)
+        #: The robot's counters (``ticks_skipped``), if it keeps them; its skipped ticks when
+        #: the first tick had read (those before are the start-up's, not the loop's).
+        self._robot_counters = getattr(robot, "counters", None)
+        self._skipped_at_start: int | None = None
 
     # -- running ----------------------------------------------------------------------------
 
@@ -206,8 +223,8 @@ class RealtimeLoop:
             t0 = self._clock()  # the deadlines' clock: the shift is in its seconds
             arrived = wait(self.align_s)
             waited = self._clock() - t0
-            if arrived:
-                self.deadlines.shift(waited)  # the state comes later in the period: follow it
+            if arrived:  # the state comes later in the period: follow it, a step at a time
+                self.deadlines.shift(min(waited, ALIGN_FOLLOW_S))
             else:
                 self.align_timeouts += 1
         ticks, timeouts = self._align_window
@@ -225,6 +242,8 @@ class RealtimeLoop:
         c0, t0 = self._cpu(), timer()
         now = loop.robot.time_s
         record = loop.robot.read_sensors()
+        if self._skipped_at_start is None:
+            self._skipped_at_start = getattr(self._robot_counters, "ticks_skipped", 0)
         q, v = loop.estimate_state(record)
         loop.context.observe(now, q, v)
         self.fresh = record is not None
@@ -305,6 +324,14 @@ class RealtimeLoop:
                 f"{stats.recent('cpu', 99) * 1e3:.2f} ms | {self.goal_text()} | {control}"
                 f"{phase}")
 
+    @property
+    def state_ticks_skipped(self) -> int:
+        """The robot's states no tick read, counted from the first tick (two came within one
+        tick: the older is skipped); the robot's own ``ticks_skipped`` also counts those sent
+        while the loop was being built."""
+        skipped = getattr(self._robot_counters, "ticks_skipped", 0)
+        return skipped - (skipped if self._skipped_at_start is None else self._skipped_at_start)
+
     def report(self) -> dict[str, Any]:
         """The run's figures for a JSON report: rate, counters, per-stage timing [ms], the
         robot's counters, how it stopped, every goal's terminal event."""
@@ -313,7 +340,8 @@ class RealtimeLoop:
         ended = ("succeeded", "canceled", "aborted", "rejected")
         return {
             "rate_hz": self.rate_hz, "duration_s": self.loop.robot.time_s,
-            "stale_after_s": self.stale_after_s, **self.stats.report(), "robot": robot_stats,
+            "stale_after_s": self.stale_after_s, **self.stats.report(),
+            "state_ticks_skipped": self.state_ticks_skipped, "robot": robot_stats,
             "align": {"max_wait_s": self.align_s, "active": self._state_wait is not None,
                       "timeouts": self.align_timeouts, "pauses": self.align_pauses},
             "stop": {"reason": self.rest.stop_reason, "phase": self.rest.phase.name,

@@ -11,6 +11,7 @@ import sys
 import time
 from typing import Any
 
+from actions.robot.realtime_priority import request_realtime
 from sim.bridge_config import (
     BRIDGE_POSES,
     DEFAULT_RATE_HZ,
@@ -19,7 +20,7 @@ from sim.bridge_config import (
     steps_per_state,
 )
 from sim.cli.arg_types import float_in, output_file, plant_param, sensor_param, whole_in
-from sim.cli.dds_options import add_dds_options
+from sim.cli.dds_options import add_dds_options, add_priority_option
 from sim.cli.exit_codes import EXIT_NOT_SUCCEEDED, EXIT_SUCCEEDED, EXIT_UNAVAILABLE, EXIT_USAGE
 from sim.command_slot import DAMPING_KD, DEFAULT_COMMAND_TIMEOUT_S, STAND_KD, STAND_KP
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
@@ -81,6 +82,7 @@ def add_bridge_command(sub: Any) -> argparse.ArgumentParser:
     bridge.set_defaults(run=run_bridge, parser=bridge, physics_dt=PHYSICS_TIMESTEP_S)
     dds = bridge.add_argument_group("DDS")
     add_dds_options(dds, flag_help=None)  # --domain, --interface: as the commands that use it
+    add_priority_option(dds)
     dds.add_argument("--rate", dest="control_rate", type=_rate, default=DEFAULT_RATE_HZ,
                      metavar="HZ",
                      help=f"LowState_ rate [Hz]: 1000 divided by a whole number (default: "
@@ -159,6 +161,8 @@ def run_bridge(args: argparse.Namespace) -> int:
     def say(text: str) -> None:
         print(text, flush=True)
 
+    # Before DDS starts its threads, which inherit the scheduling.
+    scheduling = request_realtime(args.rt_priority)
     bridge = DdsBridge(config, on_event=lambda t_s, text: say(f"[{t_s:8.3f} s] {text}"))
     stopped_by = ["--duration" if args.duration is not None else "the end"]
     previous: dict[int, Any] = {}
@@ -169,7 +173,7 @@ def run_bridge(args: argparse.Namespace) -> int:
             print(f"go2-wbc bridge: cannot join DDS domain {config.domain_id} on "
                   f"{config.interface!r}: {' '.join(str(err).split())}", file=sys.stderr)
             return EXIT_UNAVAILABLE
-        for line in _header(config, args.duration):
+        for line in (*_header(config, args.duration), scheduling):
             say(line)
 
         def on_signal(signum: int, _frame: Any) -> None:

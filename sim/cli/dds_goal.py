@@ -13,7 +13,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import signal
 import sys
+import threading
 import time
 from concurrent.futures import TimeoutError as FutureTimeoutError
 from typing import IO, Any
@@ -80,6 +82,10 @@ def send_goal_over_dds(args: argparse.Namespace, action_name: str, goal: Any, *,
         out.write(text + "\n")
         out.flush()
 
+    # A process started in the background of a shell inherits SIGINT ignored: Ctrl-C (or
+    # kill -INT) must still cancel the goal.
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         client = DdsActionClient(GO2_ACTIONS[action_name], action_name,
                                  domain_id=args.domain, interface=args.interface)

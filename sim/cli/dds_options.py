@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from actions.robot.realtime_priority import DEFAULT_PRIORITY, MAX_PRIORITY
 from wbc.core.errors import ConfigurationError
 from wbc.robot_io.dds.domain_config import MAX_DOMAIN_ID, check_interface
 
@@ -51,6 +52,28 @@ def add_dds_options(group: Any, *, flag_help: str | None) -> None:
                        metavar="NAME",
                        help=f"network interface of the domain (default: {DEFAULT_INTERFACE}; a "
                             "real GO2: the interface of its Ethernet link, e.g. eth0 or enp3s0)")
+
+
+def rt_priority(text: str) -> int:
+    """An argparse type: a ``SCHED_FIFO`` priority in ``[0, MAX_PRIORITY]`` (0: ordinary)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= MAX_PRIORITY:
+        raise argparse.ArgumentTypeError(
+            f"expected a SCHED_FIFO priority in [0, {MAX_PRIORITY}] (0: ordinary scheduling), "
+            f"received {text!r}")
+    return value
+
+
+def add_priority_option(group: Any) -> None:
+    """``--rt-priority``: the real-time scheduling of a process that keeps a robot's clock."""
+    group.add_argument("--rt-priority", type=rt_priority, default=DEFAULT_PRIORITY, metavar="N",
+                       help=f"run under SCHED_FIFO at this priority, 1 to {MAX_PRIORITY}, when "
+                            "permitted (root or CAP_SYS_NICE), so that other processes do not "
+                            f"delay the loop's deadlines; 0: ordinary (default: "
+                            f"{DEFAULT_PRIORITY}; ros2_control uses 50)")
 
 
 def check_dds_options(args: argparse.Namespace) -> None:

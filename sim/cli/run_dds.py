@@ -16,8 +16,9 @@ import json
 import sys
 from typing import IO, Any
 
+from actions.robot.realtime_priority import request_realtime
 from sim.cli.arg_types import estimator_param, float_in, output_file
-from sim.cli.dds_options import add_dds_options
+from sim.cli.dds_options import add_dds_options, add_priority_option
 from sim.cli.exit_codes import (
     EXIT_CODES_HELP,
     EXIT_INTERRUPTED,
@@ -59,6 +60,7 @@ def add_run_command(sub: Any) -> None:
     add_dds_options(dds, flag_help="control a robot over DDS (required, no default: the "
                                    "simulated robot runs with the goal commands, or as "
                                    "'go2-wbc bridge')")
+    add_priority_option(dds)
     dds.add_argument("--control-rate", type=int, choices=RATES_HZ, default=RATES_HZ[0],
                      metavar="HZ", help=f"control rate [Hz]: {' or '.join(map(str, RATES_HZ))} "
                                         f"(default: {RATES_HZ[0]}, the GO2's usual)")
@@ -76,7 +78,7 @@ def add_run_command(sub: Any) -> None:
                      help="do not stand a robot that is down at the start (default: stand it)")
     dds.add_argument("--no-align", action="store_true",
                      help="tick on the loop's own deadlines only (default: move them to the "
-                          "robot's state arrivals, waiting up to 0.5 ms a tick: the command "
+                          "robot's state arrivals, waiting up to half a period a tick: the command "
                           "then answers each state within about the tick's own time)")
     dds.add_argument("--stale-after", type=float_in(0.001, 1.0, what="a time", unit="s",
                                                     fmt="g"),
@@ -106,7 +108,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     from actions.dds.dds_action_bridge import DdsActionBridge
     from actions.robot.control_loop import ControlLoop
     from actions.robot.dds_robot import DdsRobot, NoRobotStateError
-    from actions.robot.realtime_loop import DEFAULT_ALIGN_S, RealtimeLoop, stop_on_signals
+    from actions.robot.realtime_loop import RealtimeLoop, stop_on_signals
     from actions.robot.rest_sequence import RestSettings
     from actions.robot.tick_log import TickLog
     from sim.episode_runner import startup_objects_frozen
@@ -118,6 +120,9 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     def say(text: str) -> None:
         out.write(text + "\n")
         out.flush()
+
+    # Before DDS starts its threads, which inherit the scheduling.
+    say(request_realtime(args.rt_priority))
 
     period_s = 1.0 / args.control_rate
     robot = bridge = None
@@ -140,7 +145,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
         rt = RealtimeLoop(loop, rate_hz=args.control_rate, bridge=bridge,
                           stale_after_s=args.stale_after,
-                          align_s=0.0 if args.no_align else DEFAULT_ALIGN_S,
+                          align_s=0.0 if args.no_align else None,
                           rest=RestSettings(stand_on_start=not args.no_stand))
         log = TickLog() if args.log is not None else None
         if log is not None:
