@@ -19,7 +19,7 @@ echoes the tick of the state its command answers in ``LowCmd_.reserve``):
   KeepLast 1 reader would have overwritten it): never applied, not lost.
 - ``commands_after_stop``: taken when the bridge closed, after its last physics step.
 - ``command_history_full``: physics steps that found the reader's whole history pending
-  (:data:`sim.dds_bridge.COMMAND_HISTORY`): older commands may have been overwritten unseen.
+  (:data:`sim.command_intake.COMMAND_HISTORY`): older commands may have been overwritten unseen.
 - ``replies_lost``: ticks no valid command answered, between two that one did: for
   consecutive valid commands answering ticks ``a`` then ``b > a``, ``b - a - 1``: the states
   no command that arrived answered (every command that arrives is seen, superseded ones

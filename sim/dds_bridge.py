@@ -21,9 +21,9 @@ The wire, as the robot has it:
 - ``rt/lowcmd`` (``LowCmd_``): read BestEffort like unitree_sdk2's readers. Every physics
   step (1 kHz) takes whatever is pending, without blocking, and applies the newest command
   if it is valid, as a robot whose KeepLast 1 reader holds only the newest would. The reader
-  keeps :data:`COMMAND_HISTORY` samples, not 1, so that every command that arrives is
-  counted: one overtaken by a newer within the same step (which a KeepLast 1 reader would
-  overwrite unseen) is counted as superseded, not lost. A command with a bad ``head``,
+  keeps :data:`sim.command_intake.COMMAND_HISTORY` samples, not 1, so that every command
+  that arrives is counted: one overtaken by a newer within the same step (which a KeepLast 1
+  reader would overwrite unseen) is counted as superseded, not lost. A command with a bad ``head``,
   ``level_flag`` or CRC, or motor values a driver refuses, is dropped and counted by reason
   (:mod:`sim.bridge_stats`); commands still pending when the bridge closes are counted too.
   Slots 0 to 11 are mapped to the plant's motors by joint name; the plant's actuators are in
@@ -57,6 +57,7 @@ from cyclonedds.util import duration
 
 from sim.bridge_config import BridgeConfig
 from sim.bridge_stats import BridgeStats
+from sim.command_intake import COMMAND_HISTORY, CommandIntake
 from sim.command_slot import COMMAND, DAMPING, DAMPING_KD, STAND_KD, STAND_KP, CommandSlot
 from sim.sensors import SimulatedSensors
 from sim.sim_truth import SIM_TRUTH_TOPIC, SimTruthMessage, sim_truth_record
@@ -66,26 +67,15 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES
 from wbc.robot_io.dds.c_layout import LEVEL_FLAG_LOW, LOW_STATE_DTYPE, zero_record
-from wbc.robot_io.dds.cdr_codec import FrameError
 from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
-from wbc.robot_io.dds.low_cmd_conversion import (
-    low_cmd_fault,
-    motor_command_from_low_cmd,
-    sdk_command_from_low_cmd,
-)
 from wbc.robot_io.dds.low_state_conversion import low_state_from_sensor_record
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
-from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.sensor_record import SensorRecord
 from wbc.robot_io.unitree_sdk import MODE_ENABLE, SDK_LEG_MOTORS
 
 #: Physics steps the loop may fall behind the clock before it resynchronises (an overrun).
 MAX_LAG_STEPS = 3
-#: Samples the ``rt/lowcmd`` reader holds and a physics step takes at most: 16 ms of commands
-#: at 1 kHz. A step that finds it full counts it (``command_history_full``): older ones may
-#: have been overwritten unseen.
-COMMAND_HISTORY = 16
 #: What each mode change says (:attr:`DdsBridge.on_event`).
 _TRANSITIONS = {
     ("stand", COMMAND): "first valid command: the controller drives the motors",
@@ -208,6 +198,11 @@ class DdsBridge:
                 raise
             self._dds = dds
             self._entities = (self._cmd_reader, self._state_writer, self._truth_writer)
+            self._intake = CommandIntake(self._cmd_reader, self.stats, slots=self._slots,
+                                         to_plant=self._to_plant,
+                                         joint_names=self._joint_names,
+                                         effort_limit=self.sim.effort_limit,
+                                         reject=self._reject)
             if self.config.viewer:
                 self._open_viewer()
 
@@ -228,7 +223,7 @@ class DdsBridge:
             dds, self._dds = self._dds, None
             entities, self._entities = self._entities, ()
             if dds is not None:
-                self._count_pending()
+                self._intake.count_pending()
                 delete_entities(*entities)
                 dds.close()
 
@@ -286,7 +281,7 @@ class DdsBridge:
             if self.steps % self.config.steps_per_state == 0:
                 self._publish()
             now = self._clock()
-            command = self.slot.update(self._take_commands(now), now_s=now)
+            command = self.slot.update(self._intake.take(now), now_s=now)
             stats, slot = self.stats, self.slot
             stats.commands_applied, stats.timeouts = slot.applied, slot.timeouts
             stats.commands_in_flight = slot.in_flight
@@ -315,69 +310,14 @@ class DdsBridge:
         sensor.foot_force[:] = raw.foot_force
         sensor.stamp_s, sensor.tick = raw.stamp_s, self.tick
         low_state_from_sensor_record(sensor, out=self._state)  # SDK orders, CRC
+        # Stamped before the write: a reply can arrive while write() is still returning.
+        written_s, written_ns = self._clock(), time.time_ns()
         self._state_writer.write(self._state_message)
-        self.stats.published(self.tick, self._clock(), time.time_ns())
+        self.stats.published(self.tick, written_s, written_ns)
         truth = sim_truth_record(self.sim, self.tick, out=self._truth_message.record)
         self._truth_writer.write(self._truth_message)
         if self.truth_log is not None:
             self.truth_log.append(truth)
-
-    def _take_commands(self, now_s: float) -> MotorCommand | None:
-        """Every pending ``LowCmd_``, checked and counted; the newest one if it is valid (a
-        robot's KeepLast 1 reader holds only that one): older valid ones are superseded."""
-        stats = self.stats
-        try:
-            samples = self._cmd_reader.take(N=COMMAND_HISTORY)
-        except FrameError as err:  # bytes that do not decode; taken from the reader anyway
-            stats.commands_received += 1
-            self._reject("frame", str(err))
-            return None
-        stats.command_history_full += len(samples) == COMMAND_HISTORY
-        newest = None
-        for sample in samples:
-            info = sample.sample_info
-            if info is None or not info.valid_data:  # a writer went away: no data
-                continue
-            stats.commands_received += 1
-            stats.commands_superseded += newest is not None
-            newest = self._checked(sample.record)
-            if newest is not None:
-                stats.replied(int(sample.record["reserve"]), now_s, info.source_timestamp)
-        return newest
-
-    def _count_pending(self) -> None:
-        """Count the commands that came after the last physics step (never applied)."""
-        try:
-            samples = self._cmd_reader.take(N=COMMAND_HISTORY)
-        except FrameError:
-            samples = [None]
-        self.stats.commands_after_stop += sum(
-            sample is None or (sample.sample_info is not None and sample.sample_info.valid_data)
-            for sample in samples)
-
-    def _checked(self, record: np.ndarray) -> MotorCommand | None:
-        """The command a driver would take from ``record`` (plant order), or ``None``
-        (rejected and counted). Checked compiled first; a refused one again the slow way,
-        which names the reason."""
-        command = motor_command_from_low_cmd(record, slots=self._slots,
-                                             effort_limit=self.sim.effort_limit)
-        if command is not None:
-            return command
-        fault = low_cmd_fault(record)
-        if fault is not None:  # "LowCmd_.crc: expected ..."
-            self._reject(fault.partition(":")[0].removeprefix("LowCmd_."), fault)
-            return None
-        try:
-            sdk = sdk_command_from_low_cmd(record)
-        except FrameError as err:
-            self._reject("motor_cmd", str(err))
-            return None
-        command = sdk.to_motor_command().reordered(self._to_plant)
-        problem = command.problems(self.sim.effort_limit, self._joint_names)
-        if problem:
-            self._reject("motor_cmd", f"LowCmd_.motor_cmd: {problem}")
-            return None
-        return command
 
     def _reject(self, reason: str, message: str) -> None:
         self.stats.rejected(reason, message)
