@@ -27,7 +27,6 @@ from actions.dds.dds_action_client import ActionServerUnavailableError, DdsActio
 from actions.go2.go2_actions import GO2_ACTIONS, HIGH_FIVE_ACTION
 from actions.go2.go2_interfaces import HighFiveGoal
 from actions.goal_status import GoalStatus
-from actions.message_fields import set_message_fields
 from actions.responses import FeedbackMessage, WrappedResult
 from sim.cli.exit_codes import (
     EXIT_INTERRUPTED,
@@ -37,8 +36,8 @@ from sim.cli.exit_codes import (
     EXIT_UNAVAILABLE,
     EXIT_USAGE,
 )
-from sim.cli.send_goal import _block, _rounded
-from wbc.core.errors import ConfigurationError, WbcError
+from sim.cli.send_goal import checked_goal, rounded_fields, yaml_block
+from wbc.core.errors import ConfigurationError
 
 #: Longest wait [s] for a server to match, and for a goal's acceptance.
 SERVER_WAIT_S = 5.0
@@ -49,15 +48,7 @@ CANCEL_WAIT_S = 15.0
 def send_goal(args: argparse.Namespace) -> int:
     """``go2-wbc send-goal ACTION [TYPE] GOAL --dds``: the goal checked as ``send-goal``
     checks it, then sent (:func:`send_goal_over_dds`)."""
-    name, action_type = args.action
-    if args.type is not None and args.type is not action_type:
-        args.parser.error(
-            f"TYPE: the '{name}' action is of type {action_type.type_name}; received "
-            f"{args.type.type_name}")
-    try:
-        goal = set_message_fields(action_type.Goal(), args.goal).validated_copy()
-    except WbcError as err:
-        args.parser.error(f"GOAL: {err}")
+    name, goal = checked_goal(args)
     return send_goal_over_dds(args, name, goal)
 
 
@@ -98,7 +89,7 @@ def send_goal_over_dds(args: argparse.Namespace, action_name: str, goal: Any, *,
         if not client.wait_for_server(SERVER_WAIT_S):
             print(f"go2-wbc: {client.unavailable_reason(SERVER_WAIT_S)}", file=sys.stderr)
             return EXIT_UNAVAILABLE
-        say("Sending goal:\n" + _block(goal) + "\n")
+        say("Sending goal:\n" + yaml_block(goal) + "\n")
         sent_s = time.monotonic()
         show = getattr(args, "feedback", None)  # None: when the phase changes
         phases: list[Any] = [None]
@@ -108,7 +99,7 @@ def send_goal_over_dds(args: argparse.Namespace, action_name: str, goal: Any, *,
             if show is False or (show is None and phase == phases[0]):
                 return
             phases[0] = phase
-            fields = _rounded(dataclasses.asdict(message.feedback))
+            fields = rounded_fields(dataclasses.asdict(message.feedback))
             text = yaml.safe_dump(fields, default_flow_style=True, sort_keys=False,
                                   width=math.inf).strip()
             say(f"Feedback [{time.monotonic() - sent_s:7.3f} s]: {text}")
@@ -124,7 +115,7 @@ def send_goal_over_dds(args: argparse.Namespace, action_name: str, goal: Any, *,
             say(f"No result within {CANCEL_WAIT_S:g} s of the cancel; status "
                 f"{handle.status.name}")
             return EXIT_INTERRUPTED if interrupted else EXIT_NOT_SUCCEEDED
-        say("\nResult:\n" + _block(wrapped.result) + "\n")
+        say("\nResult:\n" + yaml_block(wrapped.result) + "\n")
         say(f"Goal finished with status: {wrapped.status.name}")
         if interrupted:
             return EXIT_INTERRUPTED

@@ -216,7 +216,9 @@ def _show_interface(args: argparse.Namespace, stream: IO[str] | None = None) -> 
     return EXIT_SUCCEEDED
 
 
-def _send_goal(args: argparse.Namespace) -> int:
+def checked_goal(args: argparse.Namespace) -> tuple[str, Any]:
+    """``send-goal``'s action name and goal message, checked against the action's type (a
+    usage error names TYPE or the GOAL's field)."""
     name, action_type = args.action
     if args.type is not None and args.type is not action_type:
         args.parser.error(
@@ -226,7 +228,11 @@ def _send_goal(args: argparse.Namespace) -> int:
         goal = set_message_fields(action_type.Goal(), args.goal).validated_copy()
     except WbcError as err:
         args.parser.error(f"GOAL: {err}")
-    return SendGoal(args, name, goal).run()
+    return name, goal
+
+
+def _send_goal(args: argparse.Namespace) -> int:
+    return SendGoal(args, *checked_goal(args)).run()
 
 
 class SendGoal(EpisodeListener):
@@ -266,7 +272,7 @@ class SendGoal(EpisodeListener):
             print(f"go2-wbc: the '{self.action_name}' action server is not available",
                   file=sys.stderr)
         if result.wrapped is not None:
-            self.say("\nResult:\n" + _block(result.wrapped.result) + "\n")
+            self.say("\nResult:\n" + yaml_block(result.wrapped.result) + "\n")
             self.say(f"Goal finished with status: {result.status}")
         return exit_code(result)
 
@@ -274,7 +280,7 @@ class SendGoal(EpisodeListener):
 
     def goal_sending(self, runner: EpisodeRunner, now_s: float) -> None:
         self.say("Waiting for an action server to become available...")
-        self.say("Sending goal:\n" + _block(self.goal) + "\n")
+        self.say("Sending goal:\n" + yaml_block(self.goal) + "\n")
 
     def goal_response(self, handle: ClientGoalHandle, now_s: float) -> None:
         if handle.accepted:
@@ -286,7 +292,7 @@ class SendGoal(EpisodeListener):
     def feedback(self, sample: FeedbackSample, message: FeedbackMessage) -> None:
         if not self.args.feedback:
             return
-        fields = _rounded(dataclasses.asdict(message.feedback))
+        fields = rounded_fields(dataclasses.asdict(message.feedback))
         text = yaml.safe_dump(fields, default_flow_style=True, sort_keys=False,
                               width=math.inf).strip()
         self.say(f"Feedback [{self.runner.loop.robot.time_s:7.3f} s]: {text}")
@@ -316,20 +322,20 @@ _BlockDumper.add_representer(list, _represent_list)
 _BlockDumper.add_representer(dict, _represent_dict)
 
 
-def _block(message: Any) -> str:
+def yaml_block(message: Any) -> str:
     """A message as an indented YAML block, as ``ros2 action send_goal`` prints one."""
     text = yaml.dump(dataclasses.asdict(message), Dumper=_BlockDumper, sort_keys=False,
                      width=100)
     return "\n".join(f"    {line}" for line in text.rstrip("\n").splitlines())
 
 
-def _rounded(value: Any) -> Any:
+def rounded_fields(value: Any) -> Any:
     """``value`` with every float rounded to :data:`FEEDBACK_DIGITS` significant digits."""
     if isinstance(value, float):
         return float(f"{value:.{FEEDBACK_DIGITS}g}")
     if isinstance(value, dict):
-        return {key: _rounded(item) for key, item in value.items()}
+        return {key: rounded_fields(item) for key, item in value.items()}
     if isinstance(value, list):
-        return [_rounded(item) for item in value]
+        return [rounded_fields(item) for item in value]
     return value
 
