@@ -1,28 +1,48 @@
-"""Real-time scheduling for the processes that keep a robot's clock: :func:`request_realtime`.
+"""Real-time scheduling for the loops that keep a robot's clock: :class:`RealtimeScheduling`.
 
 A 500 Hz loop on a shared machine misses its deadlines when the kernel gives its core to
 another process for a few milliseconds; the staleness watchdog then damps the robot and
 aborts its goal (measured on 2 cores under a load of 2: gaps of 11 to 31 ms). Robot
-controllers run under ``SCHED_FIFO`` for this reason (ros2_control asks for priority 50 by
-default): the loop then preempts every ordinary process the moment its sleep ends. The
-loops here sleep most of each period, and Linux keeps 5 % of every second for ordinary
+controllers run their loop under ``SCHED_FIFO`` for this reason (ros2_control asks for
+priority 50): the loop then preempts every ordinary process the moment its sleep ends.
+
+What runs real-time here, and when:
+
+- **the loop thread**, at the priority asked for, and **the DDS threads that bring it its
+  samples** (Cyclone's receive threads ``recv*`` and its user delivery queue ``dq.user``)
+  one level above it, so that a state or command that arrived is in the reader before the
+  loop looks (network before computation, as PREEMPT_RT kernels order their threads);
+- **only while the loop runs**: start-up (imports, compiling, building the controller) stays
+  ordinary, so that it cannot starve the other loops of the machine, and each thread gets
+  its scheduling back when the loop ends. Cyclone's other threads (discovery, heartbeats,
+  garbage collection) and every other thread of the process stay ordinary.
+
+The loops sleep most of each period, and Linux keeps 5 % of every second for ordinary
 processes (``sched_rt_runtime_us``), so a real-time loop cannot lock the machine up.
 
 It needs root or ``CAP_SYS_NICE`` (``sudo setcap cap_sys_nice+ep`` on the interpreter, or
-``ulimit -r``); without it the process runs as before and says so.
+``ulimit -r``); without it nothing changes, and :meth:`Scheduling.describe` says why.
 """
 
 from __future__ import annotations
 
 import os
+import threading
+from dataclasses import dataclass
+from pathlib import Path
 
 from wbc.core.errors import ConfigurationError
 
-#: The default: ordinary scheduling. Opt in with a ``SCHED_FIFO`` priority (ros2_control
-#: uses 50): with the bridge and the controller both real-time on 2 cores, the three-process
-#: tests met gaps of about 1 s in the states (not yet understood; see docs/dds.md).
-DEFAULT_PRIORITY = 0
+#: The controller's loop (ros2_control's default priority).
+CONTROLLER_PRIORITY = 50
+#: The simulated robot's physics loop, below the controller: a late physics step only delays
+#: a state (the controller's alignment waits for it), a preempted controller misses a deadline.
+BRIDGE_PRIORITY = 40
 MAX_PRIORITY = 99
+#: Name prefixes of the Cyclone DDS threads that deliver samples to the readers: one receive
+#: thread (``recv``, with multicast off) or one per socket (``recvUC``, ``recvMC``), and the
+#: delivery queue of user data.
+IO_THREAD_PREFIXES = ("recv", "dq.user")
 
 
 def check_priority(priority: int) -> int:
@@ -39,36 +59,126 @@ def check_priority(priority: int) -> int:
     return priority
 
 
-def request_realtime(priority: int = DEFAULT_PRIORITY) -> str:
-    """Run the calling thread, and the threads it starts from now on, under ``SCHED_FIFO``.
+@dataclass(frozen=True)
+class PromotedThread:
+    """A thread made real-time: its kernel name, id and ``SCHED_FIFO`` priority."""
 
-    Call it first, before DDS or any worker starts its threads, so that they inherit it.
+    name: str
+    tid: int
+    priority: int
+
+
+@dataclass(frozen=True)
+class Scheduling:
+    """What :class:`RealtimeScheduling` did: the threads it made real-time (none when it
+    could not or was not asked), and why not when it could not."""
+
+    priority: int
+    promoted: tuple[PromotedThread, ...] = ()
+    refused: str = ""
+
+    @property
+    def realtime(self) -> bool:
+        """Whether the loop thread runs under ``SCHED_FIFO``."""
+        return bool(self.promoted)
+
+    def describe(self) -> str:
+        """One line for the process's output."""
+        if self.realtime:
+            io = sorted({(t.name, t.priority) for t in self.promoted[1:]})
+            listed = ", ".join(f"{name} {priority}" for name, priority in io)
+            return (f"scheduling: real-time while the loop runs, SCHED_FIFO {self.priority} "
+                    f"(DDS delivery: {listed or 'no thread found'})")
+        if self.priority == 0:
+            return "scheduling: ordinary (--rt-priority 0)"
+        return (f"scheduling: ordinary ({self.refused}; deadlines may be missed on a busy "
+                "machine)")
+
+
+class RealtimeScheduling:
+    """A context manager: the calling thread under ``SCHED_FIFO`` at ``priority``, the DDS
+    delivery threads at ``priority + 1`` (at most 99), each thread's scheduling back as it
+    was on exit. All or nothing: a refusal part way leaves every thread as it was.
+
+    Enter it in the loop's thread, after DDS has started (its threads must exist).
 
     Args:
-        priority: ``SCHED_FIFO`` priority, 1 to 99; 0 leaves the scheduling as it is.
-
-    Returns:
-        A sentence for the process's first lines: what scheduling it runs under, and why
-        not real-time when it could not be.
+        priority: ``SCHED_FIFO`` priority of the loop, 1 to 99; 0 changes nothing.
+        io_threads: Name prefixes of the threads to run one level above the loop.
 
     Raises:
         ConfigurationError: A priority outside [0, 99].
     """
-    check_priority(priority)
-    if priority == 0:
-        return "scheduling: ordinary (--rt-priority 0)"
-    if not hasattr(os, "sched_setscheduler"):
-        return "scheduling: ordinary (this system has no SCHED_FIFO)"
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-    except PermissionError:
-        return (f"scheduling: ordinary (SCHED_FIFO {priority} needs root or CAP_SYS_NICE; "
-                "deadlines may be missed on a busy machine)")
-    except OSError as err:
-        return f"scheduling: ordinary (SCHED_FIFO {priority} refused: {err})"
-    return f"scheduling: real-time, SCHED_FIFO priority {priority}"
+
+    def __init__(self, priority: int, *,
+                 io_threads: tuple[str, ...] = IO_THREAD_PREFIXES) -> None:
+        self.priority = check_priority(priority)
+        self.io_threads = tuple(io_threads)
+        #: What entering did (``None`` before).
+        self.scheduling: Scheduling | None = None
+        self._saved: list[tuple[int, int, int]] = []  # (tid, policy, priority)
+
+    def __enter__(self) -> Scheduling:
+        self.scheduling = self._promote()
+        return self.scheduling
+
+    def __exit__(self, *exc: object) -> None:
+        self._restore()
+
+    def _promote(self) -> Scheduling:
+        if self.priority == 0:
+            return Scheduling(0)
+        if not hasattr(os, "sched_setscheduler"):
+            return Scheduling(self.priority, refused="this system has no SCHED_FIFO")
+        io_priority = min(self.priority + 1, MAX_PRIORITY)
+        wanted = [PromotedThread(threading.current_thread().name, threading.get_native_id(),
+                                 self.priority)]
+        wanted += [PromotedThread(name, tid, io_priority) for tid, name in _threads()
+                   if name.startswith(self.io_threads)]
+        promoted = []
+        for thread in wanted:
+            try:
+                saved = (thread.tid, os.sched_getscheduler(thread.tid),
+                         os.sched_getparam(thread.tid).sched_priority)
+                os.sched_setscheduler(thread.tid, os.SCHED_FIFO,
+                                      os.sched_param(thread.priority))
+            except ProcessLookupError:  # a thread that ended since it was listed
+                continue
+            except OSError as err:
+                self._restore()
+                why = ("needs root or CAP_SYS_NICE" if isinstance(err, PermissionError)
+                       else f"refused: {err}")
+                return Scheduling(self.priority,
+                                  refused=f"SCHED_FIFO {self.priority} {why}")
+            self._saved.append(saved)
+            promoted.append(thread)
+        return Scheduling(self.priority, tuple(promoted))
+
+    def _restore(self) -> None:
+        saved, self._saved = self._saved, []
+        for tid, policy, priority in reversed(saved):
+            try:
+                os.sched_setscheduler(tid, policy, os.sched_param(priority))
+            except OSError:  # ended, or the policy cannot be set back: nothing to undo
+                continue
 
 
-def in_realtime() -> bool:
-    """Whether the calling thread runs under ``SCHED_FIFO``."""
-    return hasattr(os, "sched_getscheduler") and os.sched_getscheduler(0) == os.SCHED_FIFO
+def thread_scheduling(tid: int | None = None) -> tuple[int, int]:
+    """The scheduling policy and priority of thread ``tid`` (the calling thread: ``None``)."""
+    tid = threading.get_native_id() if tid is None else tid
+    return os.sched_getscheduler(tid), os.sched_getparam(tid).sched_priority
+
+
+def _threads() -> list[tuple[int, str]]:
+    """This process's threads, (kernel id, kernel name); none where ``/proc`` does not
+    list them."""
+    found = []
+    tasks = Path(f"/proc/{os.getpid()}/task")
+    if not tasks.is_dir():
+        return found
+    for task in tasks.iterdir():
+        try:
+            found.append((int(task.name), (task / "comm").read_text().strip()))
+        except (OSError, ValueError):  # ended while listed
+            continue
+    return found

@@ -11,7 +11,7 @@ import sys
 import time
 from typing import Any
 
-from actions.robot.realtime_priority import request_realtime
+from actions.robot.realtime_priority import BRIDGE_PRIORITY, RealtimeScheduling
 from sim.bridge_config import (
     BRIDGE_POSES,
     DEFAULT_RATE_HZ,
@@ -82,7 +82,7 @@ def add_bridge_command(sub: Any) -> argparse.ArgumentParser:
     bridge.set_defaults(run=run_bridge, parser=bridge, physics_dt=PHYSICS_TIMESTEP_S)
     dds = bridge.add_argument_group("DDS")
     add_dds_options(dds, flag_help=None)  # --domain, --interface: as the commands that use it
-    add_priority_option(dds)
+    add_priority_option(dds, default=BRIDGE_PRIORITY, loop="the physics loop")
     dds.add_argument("--rate", dest="control_rate", type=_rate, default=DEFAULT_RATE_HZ,
                      metavar="HZ",
                      help=f"LowState_ rate [Hz]: 1000 divided by a whole number (default: "
@@ -161,8 +161,6 @@ def run_bridge(args: argparse.Namespace) -> int:
     def say(text: str) -> None:
         print(text, flush=True)
 
-    # Before DDS starts its threads, which inherit the scheduling.
-    scheduling = request_realtime(args.rt_priority)
     bridge = DdsBridge(config, on_event=lambda t_s, text: say(f"[{t_s:8.3f} s] {text}"))
     stopped_by = ["--duration" if args.duration is not None else "the end"]
     previous: dict[int, Any] = {}
@@ -173,7 +171,7 @@ def run_bridge(args: argparse.Namespace) -> int:
             print(f"go2-wbc bridge: cannot join DDS domain {config.domain_id} on "
                   f"{config.interface!r}: {' '.join(str(err).split())}", file=sys.stderr)
             return EXIT_UNAVAILABLE
-        for line in (*_header(config, args.duration), scheduling):
+        for line in _header(config, args.duration):
             say(line)
 
         def on_signal(signum: int, _frame: Any) -> None:
@@ -188,7 +186,9 @@ def run_bridge(args: argparse.Namespace) -> int:
         # it would stall the loop for ~20 ms (sim.episode_runner.startup_objects_frozen).
         gc.freeze()
         try:
-            bridge.run(args.duration)
+            with RealtimeScheduling(args.rt_priority) as scheduling:
+                say(scheduling.describe())
+                bridge.run(args.duration)
         except WbcError as err:
             say(f"[{bridge.sim.time_s:8.3f} s] the simulation stopped: {err}")
             stopped_by[0], code = "an error", EXIT_NOT_SUCCEEDED

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from actions.robot.realtime_priority import DEFAULT_PRIORITY, MAX_PRIORITY
+from actions.robot.realtime_priority import MAX_PRIORITY
 from wbc.core.errors import ConfigurationError
 from wbc.robot_io.dds.domain_config import MAX_DOMAIN_ID, check_interface
 
@@ -67,13 +67,15 @@ def rt_priority(text: str) -> int:
     return value
 
 
-def add_priority_option(group: Any) -> None:
-    """``--rt-priority``: the real-time scheduling of a process that keeps a robot's clock."""
-    group.add_argument("--rt-priority", type=rt_priority, default=DEFAULT_PRIORITY, metavar="N",
-                       help=f"run under SCHED_FIFO at this priority, 1 to {MAX_PRIORITY}, when "
-                            "permitted (root or CAP_SYS_NICE), so that other processes do not "
-                            f"delay the loop's deadlines; 0: ordinary (default: "
-                            f"{DEFAULT_PRIORITY}; ros2_control uses 50)")
+def add_priority_option(group: Any, *, default: int, loop: str) -> None:
+    """``--rt-priority``: the real-time scheduling of a loop that keeps a robot's clock."""
+    group.add_argument("--rt-priority", type=rt_priority, default=default, metavar="N",
+                       help=f"run {loop} under SCHED_FIFO at this priority, 1 to "
+                            f"{MAX_PRIORITY}, and the DDS threads that deliver its samples one "
+                            "above, while it runs and when permitted (root or CAP_SYS_NICE; "
+                            "otherwise ordinary, and the first lines say so), so that other "
+                            f"processes do not delay its deadlines; 0: ordinary (default: "
+                            f"{default})")
 
 
 def check_dds_options(args: argparse.Namespace) -> None:

@@ -16,7 +16,7 @@ import json
 import sys
 from typing import IO, Any
 
-from actions.robot.realtime_priority import request_realtime
+from actions.robot.realtime_priority import CONTROLLER_PRIORITY, RealtimeScheduling
 from sim.cli.arg_types import estimator_param, float_in, output_file
 from sim.cli.dds_options import add_dds_options, add_priority_option
 from sim.cli.exit_codes import (
@@ -60,7 +60,7 @@ def add_run_command(sub: Any) -> None:
     add_dds_options(dds, flag_help="control a robot over DDS (required, no default: the "
                                    "simulated robot runs with the goal commands, or as "
                                    "'go2-wbc bridge')")
-    add_priority_option(dds)
+    add_priority_option(dds, default=CONTROLLER_PRIORITY, loop="the control loop")
     dds.add_argument("--control-rate", type=int, choices=RATES_HZ, default=RATES_HZ[0],
                      metavar="HZ", help=f"control rate [Hz]: {' or '.join(map(str, RATES_HZ))} "
                                         f"(default: {RATES_HZ[0]}, the GO2's usual)")
@@ -121,9 +121,6 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         out.write(text + "\n")
         out.flush()
 
-    # Before DDS starts its threads, which inherit the scheduling.
-    say(request_realtime(args.rt_priority))
-
     period_s = 1.0 / args.control_rate
     robot = bridge = None
     try:
@@ -159,7 +156,9 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         if rt.rest.stand is not None:
             say(f"the robot is down (base at {loop.context.q[2]:.3f} m): standing it up"
                 + (" (dry run: printed, not sent)" if args.dry_run else ""))
-        with startup_objects_frozen(), stop_on_signals(rt):
+        with (startup_objects_frozen(), stop_on_signals(rt),
+              RealtimeScheduling(args.rt_priority) as scheduling):
+            say(scheduling.describe())
             rt.run(duration_s=args.duration)
         report = rt.report()
         say(_summary(report))
