@@ -173,6 +173,13 @@ class ActionRunner:
         active = self._goals.active
         return None if active is None else active.goal_id
 
+    def active_goals(self) -> tuple[GoalRecord, ...]:
+        """The goals not ended yet: the one EXECUTING or CANCELING first, if any, then those
+        accepted and waiting to start, oldest first (a snapshot; the records are the runner's
+        own, read them on the ticking thread)."""
+        active = self._goals.active
+        return (*(() if active is None else (active,)), *tuple(self._goals.queue))
+
     @property
     def queued_goal_ids(self) -> tuple[str, ...]:
         """Accepted goals waiting to start, oldest first."""

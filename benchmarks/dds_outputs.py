@@ -153,9 +153,10 @@ class BridgeFigures:
     replies_repeated: int
     overruns: int
     timeouts: int
-    #: State -> command latency [ms]: to the physics step that took the reply ("taken"),
-    #: and to the controller's write (its DDS source timestamp: "written"); ``count``,
-    #: ``median``, ``p99``, ``max``, ``min``.
+    #: State -> command latency [ms]: to the reply's arrival at the bridge ("received"), to
+    #: the physics step that took it ("taken"), and to the controller's write (its DDS
+    #: source timestamp: "written"); ``count``, ``median``, ``p99``, ``max``, ``min``.
+    received_ms: dict[str, Any]
     taken_ms: dict[str, Any]
     written_ms: dict[str, Any]
     #: The bridge's CPU time over its wall time [% of one core].
@@ -183,7 +184,8 @@ class BridgeFigures:
             commands_rejected=dict(stats["commands_rejected"]),
             replies_lost=stats["replies_lost"], replies_repeated=stats["replies_repeated"],
             overruns=stats["overruns"], timeouts=stats["timeouts"],
-            taken_ms=dict(stats["latency_ms"]), written_ms=dict(stats["reply_ms"]),
+            received_ms=dict(stats["received_ms"]), taken_ms=dict(stats["latency_ms"]),
+            written_ms=dict(stats["reply_ms"]),
             cpu_percent=float(data.get("cpu_percent", math.nan)),
             wall_time_s=float(data["wall_time_s"]), final_mode=str(data["final_mode"]),
             raw=data)

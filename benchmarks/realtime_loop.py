@@ -11,10 +11,11 @@ reports and logs (:mod:`benchmarks.dds_outputs`, :func:`sim.dds_evaluation.goal_
 
 - ticks and deadline misses: the controller's whole run (its start-up stand, the goals, the
   clients' start-ups, the sit at the end), and during the high fives alone (its tick log);
-- state -> command latency at the bridge: "taken" is from writing a LowState_ to the physics
-  step that takes the command answering it (it includes the wait for that 1 ms step);
-  "written" is to the controller's write of the command (its DDS source timestamp, the same
-  host's clock);
+- state -> command latency at the bridge, from writing a LowState_: "received" is to the
+  arrival of the command answering it (the issue's latency: the bridge waits on its command
+  reader between physics steps); "taken" is to the physics step that applies it (it adds the
+  wait for that 1 ms step); "written" is to the controller's write of the command (its DDS
+  source timestamp, the same host's clock);
 - commands: sent by the controller, received by the bridge (a newer one that arrives before
   the bridge's next 1 ms step replaces the older in its reader: the difference), states no
   command answered ("replies lost");
@@ -101,7 +102,8 @@ def run_rate(rate_hz: int, goals: int, workdir: Path, *, domain_id: int) -> dict
                    "commands_applied": wire.commands_applied,
                    "commands_rejected": wire.commands_rejected,
                    "replies_lost": wire.replies_lost, "overruns": wire.overruns,
-                   "taken_ms": wire.taken_ms, "written_ms": wire.written_ms,
+                   "received_ms": wire.received_ms, "taken_ms": wire.taken_ms,
+                   "written_ms": wire.written_ms,
                    "cpu_percent": wire.cpu_percent},
         "quality": [r.as_dict() for r in runs],
     }
@@ -148,6 +150,7 @@ def table(result: dict[str, Any]) -> list[str]:
                  f"({100.0 * ctrl['goal_deadline_misses'] / max(ctrl['goal_ticks'], 1):.2f} %)"),
              row("ticks without a fresh state / watchdog",
                  f"{ctrl['no_fresh_state_ticks']} / {ctrl['watchdog_trips']} trips"),
+             row("latency state -> command received [ms]", _ms(wire["received_ms"])),
              row("latency state -> command taken [ms]", _ms(wire["taken_ms"])),
              row("latency state -> command written [ms]", _ms(wire["written_ms"])),
              row("commands sent / received / not received",

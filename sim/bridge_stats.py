@@ -28,9 +28,12 @@ echoes the tick of the state its command answers in ``LowCmd_.reserve``):
 - ``replies_repeated``: valid commands answering a tick no newer than the previous one's.
 - ``replies_unmatched``: valid commands whose ``reserve`` is no tick of the last
   :data:`RING_TICKS` published (a controller that does not echo sends 0): no latency.
-- ``latency_ms``: state-to-command latency, from writing a state to the physics step that
-  takes its reply, on the bridge's clock (it includes the wait for that step: up to one
-  physics step).
+- ``received_ms``: state-to-command latency, from writing a state to receiving the command
+  that answers it (the bridge waits on its command reader between physics steps and stamps
+  each arrival; one that arrives during a step is stamped when the step takes it), on the
+  bridge's clock.
+- ``latency_ms``: from writing a state to the physics step that applies its reply ("taken":
+  the received latency plus the wait for the next 1 ms step).
 - ``reply_ms``: from writing a state to the controller writing its reply (the DDS source
   timestamp; both clocks are the host's realtime clock, so it holds for a controller on the
   same host only).
@@ -107,7 +110,9 @@ class BridgeStats:
         self.replies_unmatched = 0
         self.overruns = 0
         self.timeouts = 0
-        #: Latency samples [s]: to the step that takes the reply; to the controller's write.
+        #: Latency samples [s]: to the reply's arrival; to the step that takes it; to the
+        #: controller's write.
+        self.received = Samples()
         self.latency = Samples()
         self.reply = Samples()
         #: Intervals between consecutive state writes [s].
@@ -138,14 +143,18 @@ class BridgeStats:
         self.commands_rejected[reason] = self.commands_rejected.get(reason, 0) + 1
         self.last_rejection[reason] = message
 
-    def replied(self, reply_tick: int, now_s: float, source_ns: int | None) -> None:
-        """A valid command answering ``reply_tick`` was taken at ``now_s`` [s]; the controller
-        wrote it at ``source_ns`` [ns] (realtime clock; ``None``: unknown)."""
+    def replied(self, reply_tick: int, now_s: float, source_ns: int | None, *,
+                received_s: float | None = None) -> None:
+        """A valid command answering ``reply_tick`` arrived at ``received_s`` [s] (``None``:
+        ``now_s``) and was taken at ``now_s`` [s]; the controller wrote it at ``source_ns``
+        [ns] (realtime clock; ``None``: unknown)."""
         slot = reply_tick % RING_TICKS
         if reply_tick == 0 or self._ring_tick[slot] != reply_tick:
             self.replies_unmatched += 1
             return
-        self.latency.add(now_s - self._ring_s[slot])
+        published_s = self._ring_s[slot]
+        self.received.add((now_s if received_s is None else received_s) - published_s)
+        self.latency.add(now_s - published_s)
         if source_ns:
             self.reply.add((source_ns - int(self._ring_ns[slot])) * 1e-9)
         if self._last_reply is not None:
@@ -181,6 +190,7 @@ class BridgeStats:
             "replies_lost": self.replies_lost,
             "replies_repeated": self.replies_repeated,
             "replies_unmatched": self.replies_unmatched,
+            "received_ms": self.received.summary(1e3),
             "latency_ms": self.latency.summary(1e3),
             "reply_ms": self.reply.summary(1e3),
             "overruns": self.overruns,
@@ -211,7 +221,8 @@ class BridgeStats:
             f"timeouts to damping {self.timeouts}")
         for reason, message in sorted(self.last_rejection.items()):
             lines.append(f"last {reason} rejection: {message}")
-        for name, samples in (("state -> command taken", self.latency),
+        for name, samples in (("state -> command received", self.received),
+                              ("state -> command taken", self.latency),
                               ("state -> controller's write", self.reply)):
             s = samples.summary(1e3)
             if s["count"]:

@@ -1,5 +1,11 @@
 """The commands a simulated GO2's ``rt/lowcmd`` reader takes each physics step, checked and
-counted: :class:`CommandIntake` (part of :class:`sim.dds_bridge.DdsBridge`)."""
+counted: :class:`CommandIntake` (part of :class:`sim.dds_bridge.DdsBridge`).
+
+Between physics steps the bridge waits on the reader (:meth:`CommandIntake.wait_until`)
+instead of sleeping: each command is taken the moment it arrives and stamped with its
+arrival, as a robot's drivers receive it, and applied at the next step. The arrival is the
+"received" latency of :mod:`sim.bridge_stats`; the step is its "taken" latency.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +13,8 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+from cyclonedds.util import duration
 
 from sim.bridge_stats import BridgeStats
 from wbc.robot_io.dds.cdr_codec import FrameError
@@ -48,39 +56,69 @@ class CommandIntake:
         self._joint_names = joint_names
         self._effort_limit = effort_limit
         self._reject = reject
+        # What arrived since the last step: (arrival [s], samples, or the FrameError of
+        # bytes that did not decode).
+        self._arrived: list[tuple[float, list[Any] | FrameError]] = []
+        self._waitset: WaitSet | None = None
+        self._condition: ReadCondition | None = None
+
+    def wait_until(self, deadline_s: float, clock: Callable[[], float]) -> None:
+        """Wait until ``deadline_s`` on ``clock`` [s], taking each command as it arrives
+        (stamped with ``clock``); :meth:`take` checks and counts them at the next step."""
+        if self._waitset is None:
+            self._waitset = WaitSet(self._reader.participant)
+            self._condition = ReadCondition(
+                self._reader, SampleState.Any | ViewState.Any | InstanceState.Any)
+            self._waitset.attach(self._condition)
+        while (remaining := deadline_s - clock()) > 0.0:
+            self._waitset.wait(duration(seconds=remaining))
+            if self._condition.triggered:
+                self._arrived.append((clock(), self._take_pending()))
 
     def take(self, now_s: float) -> MotorCommand | None:
-        """Every pending ``LowCmd_``, checked and counted; the newest one if it is valid (a
-        robot's KeepLast 1 reader holds only that one): older valid ones are superseded."""
+        """Every ``LowCmd_`` that arrived since the last step (:meth:`wait_until`) or is
+        pending now, checked and counted; the newest one if it is valid (a robot's KeepLast 1
+        reader holds only that one): older valid ones are superseded."""
         stats = self.stats
-        try:
-            samples = self._reader.take(N=COMMAND_HISTORY)
-        except FrameError as err:  # bytes that do not decode; taken from the reader anyway
-            stats.commands_received += 1
-            self._reject("frame", str(err))
-            return None
-        stats.command_history_full += len(samples) == COMMAND_HISTORY
+        arrived, self._arrived = self._arrived, []
+        arrived.append((now_s, self._take_pending()))
         newest = None
-        for sample in samples:
-            info = sample.sample_info
-            if info is None or not info.valid_data:  # a writer went away: no data
+        for received_s, samples in arrived:
+            if isinstance(samples, FrameError):  # taken from the reader anyway
+                stats.commands_received += 1
+                self._reject("frame", str(samples))
                 continue
-            stats.commands_received += 1
-            stats.commands_superseded += newest is not None
-            newest = self.checked(sample.record)
-            if newest is not None:
-                stats.replied(int(sample.record["reserve"]), now_s, info.source_timestamp)
+            stats.command_history_full += len(samples) == COMMAND_HISTORY
+            for sample in samples:
+                info = sample.sample_info
+                if info is None or not info.valid_data:  # a writer went away: no data
+                    continue
+                stats.commands_received += 1
+                stats.commands_superseded += newest is not None
+                newest = self.checked(sample.record)
+                if newest is not None:
+                    stats.replied(int(sample.record["reserve"]), now_s,
+                                  info.source_timestamp, received_s=received_s)
         return newest
+
+    def entities(self) -> tuple[Any, ...]:
+        """The DDS entities it made (to delete before the reader): the wait's condition and
+        waitset, once :meth:`wait_until` made them."""
+        return tuple(e for e in (self._condition, self._waitset) if e is not None)
+
+    def _take_pending(self) -> list[Any] | FrameError:
+        try:
+            return self._reader.take(N=COMMAND_HISTORY)
+        except FrameError as err:
+            return err
 
     def count_pending(self) -> None:
         """Count the commands that came after the last physics step (never applied)."""
-        try:
-            samples = self._reader.take(N=COMMAND_HISTORY)
-        except FrameError:
-            samples = [None]
-        self.stats.commands_after_stop += sum(
-            sample is None or (sample.sample_info is not None and sample.sample_info.valid_data)
-            for sample in samples)
+        arrived, self._arrived = self._arrived, []
+        for _, samples in [*arrived, (0.0, self._take_pending())]:
+            self.stats.commands_after_stop += 1 if isinstance(samples, FrameError) else sum(
+                sample.sample_info is not None and sample.sample_info.valid_data
+                for sample in samples)
 
     def checked(self, record: np.ndarray) -> MotorCommand | None:
         """The command a driver would take from ``record`` (plant order), or ``None``

@@ -33,10 +33,12 @@ The wire, as the robot has it:
   ``LowState_`` with the same tick, for evaluation only.
 
 Pacing: physics step ``k`` starts at ``start + k * dt`` on the clock (deadlines from the
-start: no drift); the loop sleeps until then. Behind by more than :data:`MAX_LAG_STEPS`
-steps, it counts an overrun and starts the deadlines again from now instead of running the
-missed steps in a burst. A state is written at the start of its step, before the physics
-advances, so it leaves on time; its reply is applied from the first step that takes it.
+start: no drift); until then the loop waits on the command reader, taking each command the
+moment it arrives (stamped: the "received" latency). Behind by more than
+:data:`MAX_LAG_STEPS` steps, it counts an overrun and starts the deadlines again from now
+instead of running the missed steps in a burst. A state is written at the start of its
+step, before the physics advances, so it leaves on time; its reply is applied from the
+first step after it arrived.
 Latency: ``LowCmd_.reserve`` echoes the ``tick`` a command answers (:mod:`sim.bridge_stats`).
 """
 
@@ -95,7 +97,9 @@ class DdsBridge:
     Args:
         config: The domain, rates, plant, sensors and command handling.
         clock: The clock [s] for pacing, timeouts and latencies (``time.monotonic``).
-        sleep: Waits a number of seconds (``time.sleep``).
+        sleep: Waits a number of seconds between steps; ``None`` (the default): wait on the
+            command reader, taking each command as it arrives (stamped with ``clock``:
+            :meth:`sim.command_intake.CommandIntake.wait_until`).
         on_event: Told ``(sim time [s], text)`` of each mode change, the first rejected
             command of each reason and the viewer's closing; called on the loop's thread.
 
@@ -105,7 +109,7 @@ class DdsBridge:
 
     def __init__(self, config: BridgeConfig | None = None, *,
                  clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], None] = time.sleep,
+                 sleep: Callable[[float], None] | None = None,
                  on_event: Callable[[float, str], None] | None = None):
         self.config = config = config or BridgeConfig()
         self._clock, self._sleep = clock, sleep
@@ -224,7 +228,7 @@ class DdsBridge:
             entities, self._entities = self._entities, ()
             if dds is not None:
                 self._intake.count_pending()
-                delete_entities(*entities)
+                delete_entities(*self._intake.entities(), *entities)
                 dds.close()
 
     def __enter__(self) -> DdsBridge:
@@ -257,7 +261,10 @@ class DdsBridge:
                         break
                     now = clock()
                     if now < deadline:
-                        self._sleep(deadline - now)
+                        if self._sleep is None:
+                            self._intake.wait_until(deadline, clock)
+                        else:
+                            self._sleep(deadline - now)
                     elif now - deadline > MAX_LAG_STEPS * dt:
                         self.stats.overruns += 1
                         base_s, base_step = now, self.steps

@@ -699,6 +699,9 @@ def test_shutdown_ends_every_goal_exactly_once_and_rejects_new_goals() -> None:
     robot.runner.tick(0.0)
     queued = robot.send("stand", StandGoal())  # preempts: first unwinds, queued waits
     robot.runner.tick(1.0)
+    # The running goal first (unwinding), then the one waiting.
+    assert [(r.goal_id, r.status) for r in robot.runner.active_goals()] == [
+        ("1", S.CANCELING), ("2", S.ACCEPTED)]
     pending = robot.send()  # never reaches a tick
     pending_cancel = done(queued).cancel_goal_async()
     finished: Counter[str] = Counter()
@@ -737,7 +740,7 @@ def test_shutdown_ends_every_goal_exactly_once_and_rejects_new_goals() -> None:
     )
     assert terminal == {"1": 1, "2": 1}
     assert robot.runner.is_shut_down and robot.runner.active_goal_id is None
-    assert robot.runner.queued_goal_ids == ()
+    assert robot.runner.queued_goal_ids == () and robot.runner.active_goals() == ()
     assert done(done(first).cancel_goal_async()) == CancelResponse(
         "1", CancelReturnCode.ERROR_GOAL_TERMINATED, "the runner is shut down; nothing to cancel"
     )

@@ -239,7 +239,8 @@ def test_stats_count_lost_repeated_and_unmatched_replies() -> None:
     stats = BridgeStats()
     for tick in range(1, 11):
         stats.published(tick, tick * 2e-3, tick * 2_000_000)
-    stats.replied(1, 3e-3, 2_500_000)      # 1 ms after tick 1; written 0.5 ms after it
+    stats.replied(1, 3e-3, 2_500_000, received_s=2.7e-3)  # written 0.5 ms after tick 1,
+    #                                      arrived 0.7 ms after, taken 1 ms after
     stats.replied(2, 5e-3, None)
     stats.replied(5, 11e-3, None)          # ticks 3 and 4 got no reply
     stats.replied(5, 12e-3, None)          # the same tick again
@@ -248,6 +249,8 @@ def test_stats_count_lost_repeated_and_unmatched_replies() -> None:
     assert (stats.replies_lost, stats.replies_repeated, stats.replies_unmatched) == (2, 1, 2)
     np.testing.assert_allclose(stats.latency.values(), [1e-3, 1e-3, 1e-3, 2e-3])
     np.testing.assert_allclose(stats.reply.values(), [0.5e-3])
+    # Arrival unknown: the step that took it.
+    np.testing.assert_allclose(stats.received.values(), [0.7e-3, 1e-3, 1e-3, 2e-3])
     assert stats.as_dict()["latency_ms"]["max"] == pytest.approx(2.0)
 
 
@@ -394,6 +397,22 @@ def test_run_on_a_thread_publishes_and_stops(peer) -> None:
         bridge.close()
     assert not thread.is_alive() and not bridge.is_started
     assert bridge.stats.states_published >= 20
+
+
+def test_a_command_is_stamped_when_it_arrives_between_physics_steps(peer) -> None:
+    """Between steps the bridge waits on its command reader: the "received" latency is the
+    arrival, the "taken" one the next step (here 0.1 s later)."""
+    with DdsBridge(BridgeConfig(domain_id=DOMAIN_ID, sensors="exact")) as bridge:
+        bridge.start()
+        peer.wait_for_bridge()
+        bridge.step()  # publishes tick 1
+        peer.cmd.write(low_cmd(STAND_SDK, reply_tick=bridge.tick))
+        bridge._intake.wait_until(time.monotonic() + 0.1, time.monotonic)
+        bridge.step()
+        stats = bridge.stats
+        assert (stats.commands_received, stats.commands_applied) == (1, 1)
+        (received_s,), (taken_s,) = stats.received.values(), stats.latency.values()
+    assert taken_s >= 0.1 and 0.0 < received_s < taken_s - 0.05
 
 
 def test_viewer_without_a_display_runs_headless(monkeypatch) -> None:

@@ -86,14 +86,8 @@ def damping_command(kd: float) -> MotorCommand:
 
 
 def active_goals(loop: ControlLoop) -> list[GoalRecord]:
-    """The runner's goals that are running or accepted and waiting.
-
-    The runner has no public accessor for them; this reads its bookkeeping (on the ticking
-    thread only, where the runner writes it).
-    """
-    lifecycle = loop.runner._goals  # see the docstring
-    records = [] if lifecycle.active is None else [lifecycle.active]
-    return records + list(lifecycle.queue)
+    """The runner's goals that are running or accepted and waiting (on the ticking thread)."""
+    return list(loop.runner.active_goals())
 
 
 class RestSequence:
