@@ -128,6 +128,15 @@ def status_lines(text: str) -> list[StatusLine]:
     return lines
 
 
+def loop_scheduling(text: str) -> str:
+    """What a bridge's or controller's output says of its loop's scheduling (its
+    ``scheduling: ...`` line, without the prefix), or ``not reported``."""
+    for line in text.splitlines():
+        if line.startswith("scheduling: "):
+            return line.removeprefix("scheduling: ")
+    return "not reported"
+
+
 def bridge_events(text: str) -> list[tuple[float, str]]:
     """The bridge's events (``[sim time s] text``: mode changes, rejections), in order."""
     return [(float(m.group(1)), m.group(2)) for m in _EVENT.finditer(text)]

@@ -2,7 +2,8 @@
 and ``go2-wbc high-five --dds`` clients on a private DDS domain on loopback, N high fives, at
 500 Hz and 1 kHz.
 
-Run ``python -m benchmarks.realtime_loop [--rate 500|1000|both] [--goals N] [--json [PATH]]``.
+Run ``python -m benchmarks.realtime_loop [--rate 500|1000|both] [--goals N] [--ordinary]
+[--load N] [--json [PATH]]``.
 
 For each rate: the bridge (LowState_ at the rate), the controller (at the rate), then N high
 fives (0.4 m, held 2 s) one after the other, each from a new client process; then Ctrl-C to
@@ -25,6 +26,11 @@ reports and logs (:mod:`benchmarks.dds_outputs`, :func:`sim.dds_evaluation.goal_
   thread's CPU time of the whole tick), and each process's CPU share over its life;
 - quality: each goal's figures against the simulator's truth, mean and worst over the goals.
 
+Both loops run real-time (``SCHED_FIFO`` while they run, the processes' default when the
+machine permits it; :mod:`actions.robot.realtime_priority`); ``--ordinary`` runs them under
+ordinary scheduling instead, and ``--load N`` runs N CPU-bound ordinary processes beside them
+(a busy machine). The notes say which scheduling each loop ran under.
+
 The machine's load average is printed at the start and the end of each rate's run: three
 Python processes share the cores with whatever else runs, and a client's start-up (about a
 CPU second of imports) competes with the loop on a 2-core machine.
@@ -33,17 +39,25 @@ CPU second of imports) competes with the loop on a 2-core machine.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
+import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from benchmarks.dds_outputs import BridgeFigures, ControllerFigures, client_outcome
+from benchmarks.dds_outputs import (
+    BridgeFigures,
+    ControllerFigures,
+    client_outcome,
+    loop_scheduling,
+)
 from benchmarks.dds_processes import DdsProcesses, private_domain_id
 from benchmarks.reporting import json_safe, machine
 from sim.dds_evaluation import goal_runs
@@ -64,14 +78,37 @@ QUALITY = (("raised_foot_rms_mm", "raised foot RMS [mm]", 1.0),
            ("pitch_max_deg", "estimate: pitch error max [deg]", 1.0))
 
 
-def run_rate(rate_hz: int, goals: int, workdir: Path, *, domain_id: int) -> dict[str, Any]:
-    """Bridge, controller and ``goals`` high-five clients at ``rate_hz``; their figures."""
+def run_rate(rate_hz: int, goals: int, workdir: Path, *, domain_id: int,
+             ordinary: bool = False, load: int = 0) -> dict[str, Any]:
+    """Bridge, controller and ``goals`` high-five clients at ``rate_hz`` (loops under
+    ordinary scheduling with ``ordinary``; ``load`` CPU-bound processes beside them); their
+    figures."""
+    with busy_processes(load):
+        return _run_rate(rate_hz, goals, workdir, domain_id=domain_id,
+                         scheduling=["--rt-priority", "0"] if ordinary else [], load=load)
+
+
+@contextlib.contextmanager
+def busy_processes(count: int) -> Iterator[None]:
+    """``count`` CPU-bound Python processes under ordinary scheduling while the block runs."""
+    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+            for _ in range(count)]
+    try:
+        yield
+    finally:
+        for process in busy:
+            process.kill()
+            process.wait()
+
+
+def _run_rate(rate_hz: int, goals: int, workdir: Path, *, domain_id: int,
+              scheduling: list[str], load: int) -> dict[str, Any]:
     load_start = os.getloadavg()
     wall_start = time.monotonic()
     outcomes = []
     with DdsProcesses(workdir, domain_id=domain_id) as run:
-        bridge = run.bridge(rate_hz=rate_hz)
-        controller = run.controller(rate_hz=rate_hz)
+        bridge = run.bridge(*scheduling, rate_hz=rate_hz)
+        controller = run.controller(*scheduling, rate_hz=rate_hz)
         for _ in range(goals):
             started = time.monotonic()
             client = run.high_five(height_m=HEIGHT_M, hold_s=HOLD_S)
@@ -89,13 +126,17 @@ def run_rate(rate_hz: int, goals: int, workdir: Path, *, domain_id: int) -> dict
     goal_misses, goal_ticks = high_five_misses(controller.log_path)
     return {
         "rate_hz": rate_hz, "goals": outcomes, "wall_s": time.monotonic() - wall_start,
+        "scheduling": {"bridge": loop_scheduling(bridge.output()),
+                       "controller": loop_scheduling(controller.output())},
+        "background_load": load,
         "load_average_start": list(load_start), "load_average_end": list(os.getloadavg()),
         "controller": {"ticks": loop.ticks, "deadline_misses": loop.deadline_misses,
                        "miss_percent": loop.miss_percent, "goal_ticks": goal_ticks,
                        "goal_deadline_misses": goal_misses,
                        "no_fresh_state_ticks": loop.no_fresh_state_ticks,
                        "watchdog_trips": loop.watchdog_trips, "robot": loop.robot,
-                       "series": loop.series, "cpu_percent": controller_cpu},
+                       "series": loop.series, "cpu_percent": controller_cpu,
+                       "gc": loop.raw.get("gc")},
         "bridge": {"states_published": wire.states_published,
                    "publish_rate_hz": wire.publish_rate_hz,
                    "commands_received": wire.commands_received,
@@ -104,7 +145,7 @@ def run_rate(rate_hz: int, goals: int, workdir: Path, *, domain_id: int) -> dict
                    "replies_lost": wire.replies_lost, "overruns": wire.overruns,
                    "received_ms": wire.received_ms, "taken_ms": wire.taken_ms,
                    "written_ms": wire.written_ms,
-                   "cpu_percent": wire.cpu_percent},
+                   "cpu_percent": wire.cpu_percent, "gc": wire.raw.get("gc")},
         "quality": [r.as_dict() for r in runs],
     }
 
@@ -162,10 +203,18 @@ def table(result: dict[str, Any]) -> list[str]:
                  f"{rejected} ({wire['commands_rejected'].get('crc', 0)}) / "
                  f"{robot.get('bad_frames', 0)}"),
              row("bridge physics overruns", str(wire["overruns"]))]
-    for name in ("read", "actions", "controller", "write", "bridge", "hooks", "tick", "cpu"):
+    for name in ("read", "actions", "controller", "write", "bridge", "hooks", "gc", "tick",
+                 "cpu"):
         label = "tick: thread CPU [ms] mean / p99" if name == "cpu" else \
             f"tick: {name} [ms] mean / p99"
         lines.append(row(label, f"{series[name]['mean_ms']:.3f} / {series[name]['p99_ms']:.3f}"))
+    for who, figures in (("controller", ctrl["gc"]), ("bridge", wire["gc"])):
+        if figures:
+            lines.append(row(f"garbage collections, {who}: by generation / longest [ms]",
+                             "{} / {} ({} postponed, {} forced)".format(
+                                 "+".join(map(str, figures["collections"])),
+                                 "+".join(f"{x:.2f}" for x in figures["longest_ms"]),
+                                 figures["postponed"], figures["forced"])))
     cpu = ctrl["cpu_percent"]
     lines.append(row("CPU [% of a core]: controller / bridge",
                      f"{'-' if cpu is None else f'{cpu:.0f}'} / {wire['cpu_percent']:.0f}"))
@@ -182,11 +231,14 @@ def table(result: dict[str, Any]) -> list[str]:
     loads = ", ".join(f"{x:.2f}" for x in start), ", ".join(f"{x:.2f}" for x in end)
     lines += [
         (f"  notes: load average (1, 5, 15 min) {loads[0]} at the start, {loads[1]} at the "
-         f"end, on {os.cpu_count()} cores."),
+         f"end, on {os.cpu_count()} cores, with {result['background_load']} CPU-bound "
+         "processes beside the three."),
+        f"  Bridge's loop: {result['scheduling']['bridge']}.",
+        f"  Controller's loop: {result['scheduling']['controller']}.",
         ("  Misses over the whole run include each client's start-up (about a CPU second of "
          "imports sharing the cores);"),
-        ("  'taken' includes the wait for the bridge's next 1 ms physics step; 'written' is on "
-         "the host's clock (same host only)."),
+        ("  'received' is the command's arrival at the bridge; 'taken' adds the wait for its "
+         "next 1 ms physics step; 'written' is on the host's clock (same host only)."),
         ("  Stage times are wall time (a descheduled thread counts); 'thread CPU' is the loop "
          "thread's CPU time per tick.")]
     return lines
@@ -204,7 +256,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--keep", type=Path, metavar="DIR",
                         help="keep the processes' outputs, reports and logs in DIR (default: "
                              "a temporary directory, removed)")
+    parser.add_argument("--ordinary", action="store_true",
+                        help="run both loops under ordinary scheduling (default: real-time "
+                             "when permitted)")
+    parser.add_argument("--load", type=int, default=0, metavar="N",
+                        help="CPU-bound ordinary processes running beside the three (default: "
+                             "0)")
     args = parser.parse_args(argv)
+    if args.load < 0:
+        parser.error(f"--load: expected a whole number >= 0, received {args.load}")
     if args.goals < 1:
         parser.error(f"--goals: expected a whole number >= 1, received {args.goals}")
     rates = (500, 1000) if args.rate == "both" else (int(args.rate),)
@@ -213,7 +273,8 @@ def main(argv: list[str] | None = None) -> int:
         root = args.keep or Path(scratch)
         for k, rate in enumerate(rates):
             result = run_rate(rate, args.goals, root / f"{rate}hz",
-                              domain_id=private_domain_id(2 + k))
+                              domain_id=private_domain_id(2 + k), ordinary=args.ordinary,
+                              load=args.load)
             results.append(result)
             if args.json != "-":
                 print("\n".join(table(result)) + "\n", flush=True)

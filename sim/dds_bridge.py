@@ -57,6 +57,7 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
+from actions.robot.idle_collector import IdleCollector
 from sim.bridge_config import BridgeConfig
 from sim.bridge_stats import BridgeStats
 from sim.command_intake import COMMAND_HISTORY, CommandIntake
@@ -132,6 +133,8 @@ class DdsBridge:
         self.slot = CommandSlot(pose_q[self._to_plant], timeout_s=config.command_timeout_s,
                                 delay_steps=config.delay_steps)
         self.stats = BridgeStats()
+        #: Python's garbage collection, between physics steps while :meth:`run` runs.
+        self.collector = IdleCollector()
         #: Every truth sample published, when ``config.log_truth``.
         self.truth_log = TruthLog() if config.log_truth else None
         #: Physics steps done; ``LowState_`` ticks published (the last tick).
@@ -248,7 +251,8 @@ class DdsBridge:
             ConfigurationError: A negative or non-finite duration; see :meth:`start`.
         """
         length_s = None if duration_s is None else as_float("duration_s", duration_s, low=0.0)
-        with self._lock:
+        # Python's garbage collection between steps only (IdleCollector).
+        with self._lock, self.collector:
             self.start()
             clock, dt = self._clock, self.config.physics_timestep_s
             start_s = clock()
@@ -269,6 +273,7 @@ class DdsBridge:
                         self.stats.overruns += 1
                         base_s, base_step = now, self.steps
                     self.step()
+                    self.collector.collect(deadline + dt - clock())
             finally:
                 self.wall_s += clock() - start_s
         return self.stats
@@ -368,6 +373,7 @@ class DdsBridge:
             "stand_kp": STAND_KP, "stand_kd": STAND_KD, "damping_kd": DAMPING_KD,
             "steps": self.steps, "sim_time_s": self.sim.time_s, "wall_time_s": self.wall_s,
             "final_mode": self.mode, "stats": self.stats.as_dict(),
+            "gc": self.collector.report(),
         }
 
 

@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from actions.robot.deadline_clock import DEFAULT_SPIN_S, DeadlineClock
+from actions.robot.idle_collector import IdleCollector
 from actions.robot.rest_sequence import Phase, RestSequence, RestSettings, active_goals
 from actions.robot.tick_stats import SERIES, TickStats
 from wbc.controller.control_output import ControlOutput, ControlStatus
@@ -65,7 +66,7 @@ ALIGN_FOLLOW_S = 1e-4
 #: before the alignment pauses for :data:`ALIGN_PAUSE_S` [s] (a robot slower than the loop,
 #: or silent: each vain wait idles ``align_s`` of the period).
 ALIGN_PAUSE_SHARE, ALIGN_WINDOW_S, ALIGN_PAUSE_S = 0.2, 0.1, 2.0
-(_READ, _ACTIONS, _CONTROLLER, _WRITE, _BRIDGE, _HOOKS, _TICK, _CPU, _LATENCY, _WAKE,
+(_READ, _ACTIONS, _CONTROLLER, _WRITE, _BRIDGE, _HOOKS, _GC, _TICK, _CPU, _LATENCY, _WAKE,
  _ALIGN) = range(len(SERIES))
 
 
@@ -138,6 +139,9 @@ class RealtimeLoop:
         self.stale_after_s = float(stale_after_s)
         self.deadlines = DeadlineClock(1.0 / rate_hz, clock=clock, sleep=sleep, spin_s=spin_s)
         self.stats = TickStats(window_ticks=round(rate_hz))
+        #: Python's garbage collection, at the end of each tick while :meth:`run` runs.
+        self.collector = IdleCollector()
+        self._collecting = False
         self.rest = RestSequence(loop, rest)
         #: Called every tick, in the hooks stage, with this object (logs, status).
         self.callbacks: list[Callable[[RealtimeLoop], None]] = []
@@ -184,16 +188,23 @@ class RealtimeLoop:
     def run(self, *, duration_s: float | None = None) -> None:
         """Tick until stopped and at rest; ``duration_s`` [s] of robot time requests the stop.
 
-        An exception from a tick sends the damping command once, then propagates.
+        An exception from a tick sends the damping command once, then propagates. Python's
+        garbage collection runs at the end of the ticks, not wherever an allocation starts
+        it (:class:`~actions.robot.idle_collector.IdleCollector`).
         """
         self.start()
         end = math.inf if duration_s is None else self.loop.robot.time_s + duration_s
         asked = False
-        while not self.done:
-            if not asked and self.loop.robot.time_s >= end:
-                asked = True
-                self.request_stop(f"duration {duration_s:g} s elapsed")
-            self.tick()
+        with self.collector:
+            self._collecting = True
+            try:
+                while not self.done:
+                    if not asked and self.loop.robot.time_s >= end:
+                        asked = True
+                        self.request_stop(f"duration {duration_s:g} s elapsed")
+                    self.tick()
+            finally:
+                self._collecting = False
 
     def tick(self) -> None:
         """Wait for the deadline, run one period, account for it."""
@@ -274,9 +285,13 @@ class RealtimeLoop:
         for callback in self.callbacks:
             callback(self)
         t6 = timer()
+        if self._collecting:  # in the time left before the next deadline
+            self.collector.collect(
+                self.deadlines.deadline_s + self.deadlines.period_s - self._clock())
+        t7 = timer()
         times[_READ], times[_ACTIONS], times[_CONTROLLER] = t1 - t0, t2 - t1, t3 - t2
         times[_WRITE], times[_BRIDGE], times[_HOOKS] = t4 - t3, t5 - t4, t6 - t5
-        times[_TICK], times[_CPU] = t6 - t0, self._cpu() - c0
+        times[_GC], times[_TICK], times[_CPU] = t7 - t6, t7 - t0, self._cpu() - c0
         times[_LATENCY], times[_WAKE], times[_ALIGN] = t4 - t0, wake_s, align_s
 
     def _watchdog(self, out: ControlOutput, v: np.ndarray, now_s: float) -> ControlOutput:
@@ -342,6 +357,7 @@ class RealtimeLoop:
             "rate_hz": self.rate_hz, "duration_s": self.loop.robot.time_s,
             "stale_after_s": self.stale_after_s, **self.stats.report(),
             "state_ticks_skipped": self.state_ticks_skipped, "robot": robot_stats,
+            "gc": self.collector.report(),
             "align": {"max_wait_s": self.align_s, "active": self._state_wait is not None,
                       "timeouts": self.align_timeouts, "pauses": self.align_pauses},
             "stop": {"reason": self.rest.stop_reason, "phase": self.rest.phase.name,

@@ -4,11 +4,12 @@ latency and its wake-up lateness, summarised over the run and over the last seco
 Series (all in seconds per tick): the stages ``read`` (take the state and estimate),
 ``actions`` (the action runner's tick), ``controller`` (the QP, the command guard),
 ``write`` (build and publish the command), ``bridge`` (poll the DDS action bridge), ``hooks``
-(the loop's tick hooks: logging); ``tick`` (the whole tick, wall clock), ``cpu`` (the CPU time
-the loop's thread spent in it, ``time.thread_time``), ``latency`` (from the start of reading
-the state to the command's publication), ``wake`` (how late the wait for the deadline ended)
-and ``align`` (how long the tick then waited for the robot's state to arrive: see
-:mod:`actions.robot.realtime_loop`).
+(the loop's tick hooks: logging), ``gc`` (Python's garbage collection, run after the command
+is written: :mod:`actions.robot.idle_collector`); ``tick`` (the whole tick, wall clock),
+``cpu`` (the CPU time the loop's thread spent in it, ``time.thread_time``), ``latency`` (from
+the start of reading the state to the command's publication), ``wake`` (how late the wait
+for the deadline ended) and ``align`` (how long the tick then waited for the robot's state to
+arrive: see :mod:`actions.robot.realtime_loop`).
 
 Whole-run percentiles come from a histogram with bins 2 % wide (so they are within 2 %);
 means and maxima are exact. The last second's figures come from a ring of its ticks.
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 #: The stages of a tick, in order.
-STAGES = ("read", "actions", "controller", "write", "bridge", "hooks")
+STAGES = ("read", "actions", "controller", "write", "bridge", "hooks", "gc")
 #: Every series recorded per tick: the stages, then the whole-tick figures.
 SERIES = (*STAGES, "tick", "cpu", "latency", "wake", "align")
 _LOW_S = 1e-7  # the histogram's first bin holds everything at or below 0.1 us

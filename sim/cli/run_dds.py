@@ -208,7 +208,7 @@ def _summary(report: dict[str, Any]) -> str:
     series = report["series"]
     stages = ", ".join(f"{name} {series[name]['mean_ms']:.3f}/{series[name]['p99_ms']:.3f}"
                        for name in ("read", "actions", "controller", "write", "bridge",
-                                    "hooks"))
+                                    "hooks", "gc"))
     robot = report["robot"]
     return (f"stopped ({report['stop']['reason'] or 'done'}; "
             f"{'; '.join(report['stop']['notes']) or 'no goal to unwind'}) after "
