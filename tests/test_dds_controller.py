@@ -4,6 +4,7 @@ and a high five over DDS against the simulator bridge in a subprocess."""
 
 from __future__ import annotations
 
+import gc
 import json
 import os
 import signal
@@ -484,6 +485,29 @@ def test_a_stop_unwinds_the_goal_sits_and_damps():
     assert np.isfinite(arrays["foot_target"][arrays["swing"][:, 1], 1]).all()
     assert np.isfinite(arrays["stage_s"]).all()
     assert len(arrays["t_s"]) == rt.stats.ticks
+
+
+def test_run_collects_garbage_at_the_end_of_its_ticks_only():
+    """Automatic collection is off while the loop runs (a collection would start inside any
+    allocation: a QP, a write); the ticks' ``gc`` stage collects instead."""
+    clock = FakeClock()
+    loop, _, _ = sim_loop(clock)
+    rt = realtime(loop, clock)
+    during: list[bool] = []
+    rt.callbacks.append(lambda _: during.append(gc.isenabled()))
+    enabled, thresholds = gc.isenabled(), gc.get_threshold()
+    gc.enable()
+    gc.set_threshold(5, 2, 2)  # the ticks allocate little: a few tracked objects each
+    try:
+        rt.run(duration_s=0.2)
+        assert gc.isenabled()  # as it was before
+    finally:
+        gc.set_threshold(*thresholds)
+        (gc.enable if enabled else gc.disable)()
+    assert during and not any(during)
+    collections = rt.report()["gc"]["collections"]
+    assert collections[0] >= 10 and collections[1] >= 1
+    assert rt.stats.summary()["gc"]["max_ms"] > 0.0
 
 
 def test_a_second_stop_damps_at_once():
