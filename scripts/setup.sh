@@ -1,37 +1,38 @@
 #!/usr/bin/env bash
 # Create .venv (when missing) and install the package with its test and scale (Ray) extras.
-# Also installs Debian's Mesa OSMesa library, which offscreen video rendering needs, and Cyclone
-# DDS 0.10.x in C, which the DDS interop test builds a peer with, when they are missing and
-# apt-get is usable (root or passwordless sudo); skipped otherwise.
+# Also installs, when they are missing and apt-get is usable (root or passwordless sudo), Debian's
+# Mesa OSMesa library (offscreen video rendering), Cyclone DDS 0.10.x in C (the DDS interop
+# test's peer) and Xvfb (the viewer window's test); skipped otherwise.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
 
-if ! ldconfig -p 2>/dev/null | grep -q libOSMesa; then
-  if command -v apt-get >/dev/null 2>&1; then
-    SUDO=""
-    [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1 && SUDO="sudo -n"
-    if [ "$(id -u)" -eq 0 ] || [ -n "$SUDO" ]; then
-      echo "setup: installing libosmesa6 (offscreen rendering for --video)"
-      ($SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libosmesa6 >/dev/null) \
-        || echo "setup: could not install libosmesa6; --video will be unavailable"
-    fi
-  fi
-fi
+# apt_install WHAT PACKAGE...: install Debian packages when apt-get is usable (root or
+# passwordless sudo); otherwise, or when it fails, say what WHAT will lack.
+apt_install() {
+  local what=$1
+  shift
+  command -v apt-get >/dev/null 2>&1 || return 0
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1 && sudo="sudo -n"
+  [ "$(id -u)" -eq 0 ] || [ -n "$sudo" ] || return 0
+  echo "setup: installing $* ($what)"
+  ($sudo apt-get update -qq && DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null) \
+    || echo "setup: could not install $*; $what will be unavailable"
+}
 
+if ! ldconfig -p 2>/dev/null | grep -q libOSMesa; then
+  apt_install "offscreen rendering for --video" libosmesa6
+fi
 # Cyclone DDS 0.10.x in C (idlc, headers, libddsc), the stack of unitree_sdk2 and unitree_mujoco:
 # tests/test_dds_interop.py builds a 0.10.x peer with it (and skips, naming the package, without).
 if ! command -v idlc >/dev/null 2>&1 || [ ! -f /usr/include/dds/dds.h ]; then
-  if command -v apt-get >/dev/null 2>&1; then
-    SUDO=""
-    [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1 && SUDO="sudo -n"
-    if [ "$(id -u)" -eq 0 ] || [ -n "$SUDO" ]; then
-      echo "setup: installing cyclonedds-dev cyclonedds-tools (Cyclone DDS 0.10.x C, DDS interop test)"
-      ($SUDO apt-get update -qq \
-        && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq cyclonedds-dev cyclonedds-tools >/dev/null) \
-        || echo "setup: could not install cyclonedds-dev cyclonedds-tools; the DDS interop test will skip"
-    fi
-  fi
+  apt_install "the DDS interop test's 0.10.x peer" cyclonedds-dev cyclonedds-tools
+fi
+# A virtual screen with software OpenGL: tests/test_viewer_window.py opens the --viewer window
+# on it (and skips, naming the package, without).
+if ! command -v Xvfb >/dev/null 2>&1; then
+  apt_install "the viewer window's test" xvfb libgl1-mesa-dri
 fi
 
 if [ ! -x .venv/bin/python ]; then

@@ -23,6 +23,8 @@ CAMERA_DISTANCE_M, CAMERA_AZIMUTH_DEG, CAMERA_ELEVATION_DEG = 1.6, 120.0, -25.0
 #: What the window says while it holds the final state (:meth:`ViewerHook.hold`): its two
 #: columns, tab-separated.
 HOLD_NOTE = "paused\tthe final state: close the window to exit"
+#: Longest wait [s] for the viewer's render loop to end when it is closed.
+CLOSE_TIMEOUT_S = 5.0
 
 
 def has_display() -> bool:
@@ -85,11 +87,15 @@ class ViewerHook:
                 window closed by its user or destroyed before :meth:`close` (its sim time
                 is then :attr:`closed_at_s`, the exception if one told it :attr:`error`).
         """
+        #: The viewer's own threads (its render loop), joined by :meth:`close`.
+        self._viewer_threads: list[threading.Thread] = []
         if handle is None:
             import mujoco.viewer
 
+            before = set(threading.enumerate())
             handle = mujoco.viewer.launch_passive(sim.model, sim.data, show_left_ui=False,
                                                   show_right_ui=False)
+            self._viewer_threads = [t for t in threading.enumerate() if t not in before]
         self.handle = handle
         with self.handle.lock():
             follow_base(self.handle.cam, sim.model)
@@ -183,6 +189,10 @@ class ViewerHook:
         self._gone = True
         with contextlib.suppress(Exception):
             self.handle.close()
+        # The render loop ends on its own thread (a daemon). An interpreter that exits while
+        # it still draws terminates GLFW under it (MuJoCo's exit hook): a segmentation fault.
+        for thread in self._viewer_threads:
+            thread.join(timeout=CLOSE_TIMEOUT_S)
 
     # -------------------------------------------------------------------------- inside
 
