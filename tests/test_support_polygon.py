@@ -53,3 +53,31 @@ def test_the_margin_moves_every_edge_inwards():
     assert sorted(map(tuple, inner.round(12))) == sorted(map(tuple, np.round(expected, 12)))
     # Nothing is left of a 0.2 m wide polygon.
     assert SupportPolygon(margin_m=0.11).inset(square) is None
+
+
+def test_closest_inside_is_the_nearest_point_of_the_inset_polygon():
+    """Against brute force: the answer lies in the inset polygon, and no point sampled on
+    the inset polygon's edges (where the nearest point of a convex polygon to an outside
+    point lies) is nearer; a point already inside comes back unchanged."""
+    rng = np.random.default_rng(5)
+    polygon = SupportPolygon(margin_m=0.03)
+    steps = np.linspace(0.0, 1.0, 2001)[:, None]
+    moved = kept = 0
+    for _ in range(300):
+        k = int(rng.integers(3, 5))
+        points = STANCE[rng.permutation(4)[:k]] + rng.normal(scale=0.01, size=(k, 2))
+        point = rng.normal(scale=0.12, size=2)
+        got = polygon.closest_inside(points, point)
+        corners = polygon.inset(points)
+        normals, offsets = polygon.halfplanes(points)
+        assert (normals @ got - offsets >= -1e-12).all()
+        if (normals @ point - offsets >= 0.0).all():
+            assert np.array_equal(got, point)
+            kept += 1
+            continue
+        moved += 1
+        edges = [a + steps * (b - a) for a, b in zip(corners, np.roll(corners, -1, axis=0))]
+        nearest = np.linalg.norm(np.vstack(edges) - point, axis=1).min()
+        assert np.linalg.norm(got - point) <= nearest + 1e-12
+        assert np.linalg.norm(got - point) >= nearest - 1e-3 * 0.5  # sampled every 0.5 mm
+    assert moved > 100 and kept > 20

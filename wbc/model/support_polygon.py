@@ -161,38 +161,56 @@ class SupportPolygon:
         Returns its corners (k, 2) counter-clockwise (corner ``j`` where the inset edges
         ``j - 1`` and ``j`` meet), or ``None`` when the margin leaves nothing of it.
         """
-        normals, offsets = self.halfplanes(points)
-        k = len(normals)
-        corners = np.empty((k, 2))
-        for i in range(k):
-            j = (i + 1) % k
-            matrix = np.vstack([normals[i], normals[j]])
-            if abs(np.linalg.det(matrix)) < 1e-12:
-                return None
-            corners[j] = np.linalg.solve(matrix, [offsets[i], offsets[j]])
-        if np.any(normals @ corners.T - offsets[:, None] < -1e-9):
-            return None
-        return corners
+        corners = _inset_corners(*self.halfplanes(points))
+        return None if corners is None else np.array(corners)
 
     def closest_inside(self, points: np.ndarray, point: np.ndarray) -> np.ndarray:
         """The point of the polygon shrunk by the margin that is closest to ``point`` (2,).
+
+        On Python floats: a handful of corners, where NumPy's per-call cost was most of the
+        time (about 100 us a call, on the first tick of every leg lift).
 
         Raises:
             ValueError: The margin leaves nothing of the polygon.
         """
         point = np.asarray(point, dtype=float)[:2]
         normals, offsets = self.halfplanes(points)
-        if np.all(normals @ point - offsets >= 0.0):
+        x, y = float(point[0]), float(point[1])
+        if all(nx * x + ny * y - o >= 0.0
+               for (nx, ny), o in zip(normals.tolist(), offsets.tolist())):
             return point.copy()
-        corners = self.inset(points)
+        corners = _inset_corners(normals, offsets)
         if corners is None:
             raise ValueError(f"margin {self.margin_m} m leaves nothing of the support polygon")
-        best, best_distance = corners[0], np.inf
-        for a, b in zip(corners, np.roll(corners, -1, axis=0)):  # the inset edges
-            ab = b - a
-            t = np.clip((point - a) @ ab / max(ab @ ab, 1e-18), 0.0, 1.0)
-            candidate = a + t * ab
-            distance = np.linalg.norm(candidate - point)
+        best, best_distance = corners[0], math.inf
+        for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1]):  # inset edges
+            ex, ey = bx - ax, by - ay
+            t = min(max(((x - ax) * ex + (y - ay) * ey) / max(ex * ex + ey * ey, 1e-18), 0.0),
+                    1.0)
+            candidate = (ax + t * ex, ay + t * ey)
+            distance = math.hypot(candidate[0] - x, candidate[1] - y)
             if distance < best_distance:
                 best, best_distance = candidate, distance
-        return best
+        return np.array(best)
+
+
+def _inset_corners(normals: np.ndarray, offsets: np.ndarray
+                   ) -> list[tuple[float, float]] | None:
+    """Where consecutive half-plane edges meet (corner ``j``: edges ``j - 1`` and ``j``),
+    counter-clockwise; ``None`` when two are parallel or a corner lies outside another
+    half-plane (nothing is left of the polygon)."""
+    rows = normals.tolist()
+    levels = offsets.tolist()
+    k = len(rows)
+    corners: list[tuple[float, float]] = [(0.0, 0.0)] * k
+    for i in range(k):
+        j = (i + 1) % k
+        (a, b), (c, d) = rows[i], rows[j]
+        det = a * d - b * c
+        if abs(det) < 1e-12:
+            return None
+        corners[j] = ((levels[i] * d - b * levels[j]) / det, (a * levels[j] - c * levels[i]) / det)
+    for (nx, ny), level in zip(rows, levels):
+        if any(nx * cx + ny * cy - level < -1e-9 for cx, cy in corners):
+            return None
+    return corners
