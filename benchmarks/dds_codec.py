@@ -25,7 +25,12 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 
 from benchmarks.reporting import json_safe, machine
-from wbc.robot_io.dds.c_layout import low_cmd_crc, low_state_crc, sdk_default_low_cmd
+from wbc.robot_io.dds.c_layout import (
+    crc32_bit_by_bit,
+    low_cmd_crc,
+    low_state_crc,
+    sdk_default_low_cmd,
+)
 from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LowCmd_, LowState_
 from wbc.robot_io.dds.low_cmd_conversion import (
@@ -71,18 +76,6 @@ def _command(rng: np.random.Generator) -> SdkMotorCommand:
         kd=rng.uniform(0.5, 5, 12), tau_ff=rng.uniform(-20, 20, 12)))
 
 
-def _crc_bit_loop(record: np.ndarray) -> int:
-    """The SDK's CRC in pure Python, bit by bit (the reference the compiled one replaces)."""
-    crc = 0xFFFFFFFF
-    for word in np.frombuffer(record, np.uint32)[:-1].tolist():
-        for bit in range(31, -1, -1):
-            top = crc >> 31
-            crc = (crc << 1) & 0xFFFFFFFF
-            if top ^ ((word >> bit) & 1):
-                crc ^= 0x04C11DB7
-    return crc
-
-
 def codec_rows(repeats: int) -> list[dict[str, Any]]:
     """Serialise / deserialise with IdlStruct and with the codec, both message types."""
     rng = np.random.default_rng(0)
@@ -116,10 +109,12 @@ def single_rows(repeats: int) -> list[dict[str, Any]]:
     command = _command(rng)
     cmd = low_cmd_from_sdk_command(command)
     reused_sensor, reused_cmd = SensorRecord.zeros(), sdk_default_low_cmd()
+    state_words = np.frombuffer(state, np.uint32)[:-1]  # every word before the CRC's
     calls: list[tuple[str, Callable[[], Any], int]] = [
         ("CRC LowCmd_ (compiled)", lambda: low_cmd_crc(cmd), repeats),
         ("CRC LowState_ (compiled)", lambda: low_state_crc(state), repeats),
-        ("CRC LowState_ (Python bit loop)", lambda: _crc_bit_loop(state), max(20, repeats // 100)),
+        ("CRC LowState_ (Python bit loop)", lambda: crc32_bit_by_bit(state_words),
+         max(20, repeats // 100)),
         ("LowState_ -> SensorRecord (in place)",
          lambda: sensor_record_from_low_state(state, out=reused_sensor), repeats),
         ("SensorRecord -> LowState_ (in place, CRC)",

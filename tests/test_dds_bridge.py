@@ -488,7 +488,7 @@ def test_duration_exits_0_with_a_summary_report_and_log(tmp_path) -> None:
     (["--interface", "nosuch0"], ("--interface: expected one of this host's network "
                                   f"interfaces {host_interfaces()}, received 'nosuch0'")),
     (["--domain", "233"], ("--domain: expected a DDS domain id in [0, 232] (a GO2: 0; the "
-                           "simulator bridge: 1), received '233'")),
+                           "simulator bridge: 1), received 233")),
     (["--rate", "300"], ("--rate: expected 1000 Hz divided by a whole number (the physics "
                          "runs at 1000 Hz: 1000, 500, 250, 200, 125, 100, ...), received 300")),
     (["--rate", "2000"], "--rate: expected a rate in [1, 1000] Hz, received 2000"),

@@ -310,12 +310,15 @@ def test_a_missed_deadline_is_counted_and_never_made_up_in_a_burst():
     clock = FakeClock()
     deadlines = DeadlineClock(PERIOD_S, clock=clock, sleep=clock.sleep, spin_s=0.0)
     deadlines.start()
-    t0, starts, missed = clock.t, [], []
+    t0, starts, missed, left = clock.t, [], [], []
     for work_ms in (0.5, 0.5, 3.0, 0.5, 5.0, 0.5, 0.5):
         assert deadlines.wait() == 0.0
         starts.append(round((clock.t - t0) * 1e3, 9))
         clock.advance(work_ms * 1e-3)
+        left.append(round(deadlines.time_left_s() * 1e3, 9))
         missed.append(deadlines.tick_done())
+    # The time left in each tick's period, negative when it overran.
+    assert left == [1.5, 1.5, -1.0, 1.5, -3.0, 1.5, 1.5]
     # 4 + 3 ms overran 6: the next tick starts at once (7), then every 2 ms from there.
     assert starts == [0.0, 2.0, 4.0, 7.0, 9.0, 14.0, 16.0]
     assert missed == [False, False, True, False, True, False, False]

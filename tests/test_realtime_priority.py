@@ -147,4 +147,4 @@ def test_the_command_line_refuses_a_bad_priority(capsys):
         main(["run", "--dds", "--rt-priority", "100"])
     assert exit_info.value.code == 2
     assert ("--rt-priority: expected a SCHED_FIFO priority in [0, 99] (0: ordinary "
-            "scheduling), received '100'") in capsys.readouterr().err
+            "scheduling), received 100") in capsys.readouterr().err

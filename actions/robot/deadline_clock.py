@@ -90,6 +90,11 @@ class DeadlineClock:
         later): how a loop keeps its phase to another clock's (a robot's states)."""
         self._deadline += delta_s
 
+    def time_left_s(self) -> float:
+        """Seconds from now to the end of this tick's period (the deadline
+        :meth:`tick_done` schedules next); negative once it has passed."""
+        return self._deadline + self.period_s - self._clock()
+
     def tick_done(self) -> bool:
         """Schedule the next deadline one period on; return whether the tick missed it.
 

@@ -64,21 +64,15 @@ class IdleCollector:
     def due() -> int | None:
         """The generation CPython would collect now (the oldest over its threshold), or
         ``None`` (also when the thresholds turn collection off: a first threshold of 0)."""
-        thresholds, counts = gc.get_threshold(), gc.get_count()
-        if thresholds[0] == 0:
-            return None
-        for generation in reversed(range(GENERATIONS)):
-            if counts[generation] > thresholds[generation]:
-                return generation
-        return None
+        return _oldest_due(gc.get_count(), gc.get_threshold())
 
     def collect(self, time_left_s: float) -> float:
         """Collect the due generation if it fits ``time_left_s`` [s] (or is overdue), else
         the oldest younger one that fits; the time spent [s]."""
-        generation = self.due()
+        counts, thresholds = gc.get_count(), gc.get_threshold()
+        generation = _oldest_due(counts, thresholds)
         if generation is None:
             return 0.0
-        counts, thresholds = gc.get_count(), gc.get_threshold()
         if counts[generation] >= OVERDUE_FACTOR * thresholds[generation]:
             if self._expected_s[generation] > time_left_s:
                 self.forced += 1
@@ -101,3 +95,14 @@ class IdleCollector:
         return {"collections": list(self.collections),
                 "longest_ms": [round(s * 1e3, 3) for s in self.longest_s],
                 "postponed": self.postponed, "forced": self.forced}
+
+
+def _oldest_due(counts: tuple[int, ...], thresholds: tuple[int, ...]) -> int | None:
+    """The oldest generation whose count is over its threshold (``None``: none, or a first
+    threshold of 0, CPython's "never")."""
+    if thresholds[0] == 0:
+        return None
+    for generation in reversed(range(GENERATIONS)):
+        if counts[generation] > thresholds[generation]:
+            return generation
+    return None

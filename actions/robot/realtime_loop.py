@@ -41,7 +41,7 @@ import numpy as np
 
 from actions.robot.deadline_clock import DEFAULT_SPIN_S, DeadlineClock
 from actions.robot.idle_collector import IdleCollector
-from actions.robot.rest_sequence import Phase, RestSequence, RestSettings, active_goals
+from actions.robot.rest_sequence import Phase, RestSequence, RestSettings
 from actions.robot.tick_stats import SERIES, TickStats
 from wbc.controller.control_output import ControlOutput, ControlStatus
 from wbc.core.errors import ConfigurationError
@@ -286,8 +286,7 @@ class RealtimeLoop:
             callback(self)
         t6 = timer()
         if self._collecting:  # in the time left before the next deadline
-            self.collector.collect(
-                self.deadlines.deadline_s + self.deadlines.period_s - self._clock())
+            self.collector.collect(self.deadlines.time_left_s())
         t7 = timer()
         times[_READ], times[_ACTIONS], times[_CONTROLLER] = t1 - t0, t2 - t1, t3 - t2
         times[_WRITE], times[_BRIDGE], times[_HOOKS] = t4 - t3, t5 - t4, t6 - t5
@@ -313,7 +312,7 @@ class RealtimeLoop:
 
     def goal_text(self) -> str:
         """The running goal and its status (``idle`` when none)."""
-        goals = active_goals(self.loop)
+        goals = self.loop.runner.active_goals()
         if not goals:
             return "idle"
         return f"{goals[0].label} {goals[0].status.name}"

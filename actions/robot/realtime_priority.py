@@ -114,13 +114,10 @@ class RealtimeScheduling:
                  io_threads: tuple[str, ...] = IO_THREAD_PREFIXES) -> None:
         self.priority = check_priority(priority)
         self.io_threads = tuple(io_threads)
-        #: What entering did (``None`` before).
-        self.scheduling: Scheduling | None = None
         self._saved: list[tuple[int, int, int]] = []  # (tid, policy, priority)
 
     def __enter__(self) -> Scheduling:
-        self.scheduling = self._promote()
-        return self.scheduling
+        return self._promote()
 
     def __exit__(self, *exc: object) -> None:
         self._restore()

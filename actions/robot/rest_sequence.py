@@ -34,7 +34,6 @@ from wbc.robot_io.motor_command import MotorCommand
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
-    from actions.goal_record import GoalRecord
     from actions.robot.control_loop import ControlLoop
 
 
@@ -83,11 +82,6 @@ def damping_command(kd: float) -> MotorCommand:
     zeros = np.zeros(len(JOINT_NAMES))
     return MotorCommand(q_des=zeros, dq_des=zeros, kp=zeros, kd=np.full(len(JOINT_NAMES), kd),
                         tau_ff=zeros)
-
-
-def active_goals(loop: ControlLoop) -> list[GoalRecord]:
-    """The runner's goals that are running or accepted and waiting (on the ticking thread)."""
-    return list(loop.runner.active_goals())
 
 
 class RestSequence:
@@ -158,7 +152,7 @@ class RestSequence:
         self._notes.append(text)
 
     def _unwind(self) -> None:
-        goals = active_goals(self.loop)
+        goals = self.loop.runner.active_goals()
         for record in goals:
             if record.goal_id not in self._canceled:
                 self._canceled.add(record.goal_id)

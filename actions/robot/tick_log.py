@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from actions.goal_status import GoalStatus
-from actions.robot.rest_sequence import Phase, active_goals
+from actions.robot.rest_sequence import Phase
 from actions.robot.tick_stats import SERIES
 from wbc.controller.control_output import ControlStatus
 from wbc.model.description import JOINT_NAMES, LEGS
@@ -99,7 +99,7 @@ class TickLog:
                 if target is not None:
                     targets[k] = target
         chunk["phase"][i] = int(rt.rest.phase)
-        goals = active_goals(loop)
+        goals = loop.runner.active_goals()
         if not self._actions:
             self._actions = loop.runner.server_names
         chunk["goal_status"][i] = int(goals[0].status) if goals else 0

@@ -42,9 +42,9 @@ def float_in(low: float, high: float, *, what: str, unit: str, fmt: str = ".2f"
     return parse
 
 
-def whole_in(low: int, high: int, *, what: str) -> Callable[[str], int]:
-    """An argparse type: an integer in ``[low, high]``."""
-    expected = f"{what} in [{low}, {high}]"
+def whole_in(low: int, high: int, *, what: str, note: str = "") -> Callable[[str], int]:
+    """An argparse type: an integer in ``[low, high]`` (``note``: said after the range)."""
+    expected = f"{what} in [{low}, {high}]" + (f" ({note})" if note else "")
 
     def parse(text: str) -> int:
         try:

@@ -8,6 +8,7 @@ import argparse
 from typing import Any
 
 from actions.robot.realtime_priority import MAX_PRIORITY
+from sim.cli.arg_types import whole_in
 from wbc.core.errors import ConfigurationError
 from wbc.robot_io.dds.domain_config import MAX_DOMAIN_ID, check_interface
 
@@ -20,17 +21,9 @@ DDS_KEEPS = frozenset({
     "interface", "server_timeout"})
 
 
-def domain_id(text: str) -> int:
-    """An argparse type: a DDS domain id in ``[0, MAX_DOMAIN_ID]``."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= MAX_DOMAIN_ID:
-        raise argparse.ArgumentTypeError(
-            f"expected a DDS domain id in [0, {MAX_DOMAIN_ID}] (a GO2: 0; the simulator "
-            f"bridge: {DEFAULT_DOMAIN}), received {text!r}")
-    return value
+#: ``--domain``: a DDS domain id in ``[0, MAX_DOMAIN_ID]``.
+domain_id = whole_in(0, MAX_DOMAIN_ID, what="a DDS domain id",
+                     note=f"a GO2: 0; the simulator bridge: {DEFAULT_DOMAIN}")
 
 
 def interface(text: str) -> str:
@@ -54,17 +47,9 @@ def add_dds_options(group: Any, *, flag_help: str | None) -> None:
                             "real GO2: the interface of its Ethernet link, e.g. eth0 or enp3s0)")
 
 
-def rt_priority(text: str) -> int:
-    """An argparse type: a ``SCHED_FIFO`` priority in ``[0, MAX_PRIORITY]`` (0: ordinary)."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= MAX_PRIORITY:
-        raise argparse.ArgumentTypeError(
-            f"expected a SCHED_FIFO priority in [0, {MAX_PRIORITY}] (0: ordinary scheduling), "
-            f"received {text!r}")
-    return value
+#: ``--rt-priority``: a ``SCHED_FIFO`` priority in ``[0, MAX_PRIORITY]`` (0: ordinary).
+rt_priority = whole_in(0, MAX_PRIORITY, what="a SCHED_FIFO priority",
+                       note="0: ordinary scheduling")
 
 
 def add_priority_option(group: Any, *, default: int, loop: str) -> None:

@@ -114,6 +114,20 @@ def _crc32_words(words, count):  # pragma: no cover - compiled
     return crc
 
 
+def crc32_bit_by_bit(words: np.ndarray) -> int:
+    """CRC-32/MPEG-2 of ``words`` (uint32) as the SDK's C loop computes it: each word fed most
+    significant bit first, one bit at a time. The slow reference (~0.8 ms for a
+    ``LowState_``) that the compiled tables are checked and timed against."""
+    crc = 0xFFFFFFFF
+    for word in np.asarray(words, dtype=np.uint32).tolist():
+        for bit in range(31, -1, -1):
+            top = crc >> 31
+            crc = (crc << 1) & 0xFFFFFFFF
+            if top ^ ((word >> bit) & 1):
+                crc ^= _POLYNOMIAL
+    return crc
+
+
 def zero_record(dtype: np.dtype) -> np.ndarray:
     """A zeroed 0-d record of ``dtype`` (e.g. :data:`LOW_STATE_DTYPE`).
 
