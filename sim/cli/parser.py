@@ -11,6 +11,7 @@ from actions.go2.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
 from sim.cli import dds_goal, goal_commands
 from sim.cli.arg_types import float_in, trajectory_file, whole_in
 from sim.cli.bridge import add_bridge_command
+from sim.cli.check import add_check_command
 from sim.cli.dds_options import add_dds_options
 from sim.cli.exit_codes import EXIT_CODES_HELP
 from sim.cli.options import CliParser, add_plant_options, run_options
@@ -104,4 +105,5 @@ def build_parser() -> argparse.ArgumentParser:
     sub.choices["send-goal"].set_defaults(dds_run=dds_goal.send_goal)
     add_bridge_command(sub)
     add_run_command(sub)
+    add_check_command(sub)
     return parser
