@@ -9,13 +9,15 @@ from functools import cached_property
 from sim.command_slot import DEFAULT_COMMAND_TIMEOUT_S, MAX_COMMAND_TIMEOUT_S, MAX_DELAY_STEPS
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
+from sim.state_framing import FRAMINGS, GO2
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.robot_io.dds.domain_config import check_domain_id, check_interface
 
 #: The physics timestep [s]: 1 kHz, the rate unitree_mujoco's bridge applies commands at.
 PHYSICS_TIMESTEP_S = 1e-3
-#: The simulation's convention (unitree_mujoco): domain 1 on the loopback interface.
+#: The bridge's default: domain 1 on the loopback interface (what unitree_mujoco's configs
+#: also use; the framing, not the domain, tells a GO2 from Unitree's simulators).
 DEFAULT_DOMAIN_ID, DEFAULT_INTERFACE = 1, "lo"
 #: ``LowState_`` rate [Hz] unless told: the rate the GO2's low level is usually run at.
 DEFAULT_RATE_HZ = 500.0
@@ -28,7 +30,8 @@ class BridgeConfig:
     """A bridge's DDS domain, rates, plant, sensors and command handling.
 
     Attributes:
-        domain_id: The DDS domain, 0 to 232 (1: unitree_mujoco's convention; a GO2 uses 0).
+        domain_id: The DDS domain, 0 to 232 (1 by default, as unitree_mujoco's configs; a
+            GO2 uses 0).
         interface: The network interface the domain is bound to (``lo``: this host only).
         rate_hz: ``LowState_`` rate [Hz], a whole number of 1 ms physics steps a period
             (1000, 500, 250, 200, ... 1).
@@ -43,6 +46,8 @@ class BridgeConfig:
         pose: The pose the robot starts and stands in (:data:`BRIDGE_POSES`).
         viewer: Open the MuJoCo viewer.
         log_truth: Keep every published truth sample (:attr:`DdsBridge.truth_log`).
+        framing: How states are framed and commands applied: a GO2's, or one of Unitree's
+            simulators' (:mod:`sim.state_framing`).
 
     Raises:
         ConfigurationError: A field out of its range or unknown, named with what is valid.
@@ -59,6 +64,7 @@ class BridgeConfig:
     pose: str = "standing"
     viewer: bool = False
     log_truth: bool = False
+    framing: str = GO2
 
     def __post_init__(self) -> None:
         check_domain_id(self.domain_id)
@@ -74,6 +80,7 @@ class BridgeConfig:
         as_float("command_timeout_s", self.command_timeout_s, low=0.0,
                  high=MAX_COMMAND_TIMEOUT_S, low_inclusive=False)
         _one_of("pose", self.pose, BRIDGE_POSES)
+        _one_of("framing", self.framing, FRAMINGS)
         for name in ("viewer", "log_truth"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigurationError(

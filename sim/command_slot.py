@@ -37,6 +37,7 @@ bridge), from the step the last valid command was applied.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import numpy as np
@@ -64,8 +65,10 @@ class CommandSlot:
     """Chooses the drivers' command each physics step: stand, the newest command, or damping.
 
     Args:
-        stand_q: The stand PD's joint targets [rad] (12,), in the drivers' joint order.
-        timeout_s: Time without a valid command [s] before damping, in (0, 10].
+        stand_q: The stand PD's joint targets [rad] (12,), in the drivers' joint order;
+            ``None``: no torque before the first command (Unitree's simulators).
+        timeout_s: Time without a valid command [s] before damping, in (0, 10]; ``None``:
+            never, the last command is held (Unitree's simulators).
         delay_steps: Physics steps between taking a command and applying it (a transport
             delay), in [0, 100].
 
@@ -73,14 +76,14 @@ class CommandSlot:
         ConfigurationError: A value out of its range, or ``stand_q`` not 12 finite numbers.
     """
 
-    def __init__(self, stand_q: np.ndarray, *, timeout_s: float = DEFAULT_COMMAND_TIMEOUT_S,
-                 delay_steps: int = 0):
-        q = np.array(stand_q, dtype=np.float64)
+    def __init__(self, stand_q: np.ndarray | None, *,
+                 timeout_s: float | None = DEFAULT_COMMAND_TIMEOUT_S, delay_steps: int = 0):
+        q = np.zeros(12) if stand_q is None else np.array(stand_q, dtype=np.float64)
         if q.shape != (12,) or not np.isfinite(q).all():
             raise ConfigurationError(
                 f"stand_q: expected 12 finite joint angles [rad], received {stand_q!r}")
-        self.timeout_s = as_float("timeout_s", timeout_s, low=0.0, high=MAX_COMMAND_TIMEOUT_S,
-                                  low_inclusive=False)
+        self.timeout_s = math.inf if timeout_s is None else as_float(
+            "timeout_s", timeout_s, low=0.0, high=MAX_COMMAND_TIMEOUT_S, low_inclusive=False)
         if isinstance(delay_steps, bool) or not isinstance(delay_steps, int) or not (
                 0 <= delay_steps <= MAX_DELAY_STEPS):
             raise ConfigurationError(
@@ -88,9 +91,11 @@ class CommandSlot:
                 f"{delay_steps!r}")
         self.delay_steps = delay_steps
         zeros = np.zeros(12)
-        #: The stand PD's command (joint targets, :data:`STAND_KP`, :data:`STAND_KD`).
-        self.stand = MotorCommand(q_des=q, dq_des=zeros.copy(), kp=np.full(12, STAND_KP),
-                                  kd=np.full(12, STAND_KD), tau_ff=zeros.copy())
+        #: The stand PD's command (joint targets, :data:`STAND_KP`, :data:`STAND_KD`), or
+        #: no torque at all without ``stand_q``.
+        gain = 0.0 if stand_q is None else 1.0
+        self.stand = MotorCommand(q_des=q, dq_des=zeros.copy(), kp=np.full(12, gain * STAND_KP),
+                                  kd=np.full(12, gain * STAND_KD), tau_ff=zeros.copy())
         #: The damping command (``kp = 0``, ``kd =`` :data:`DAMPING_KD`, ``tau = 0``).
         self.damping = MotorCommand(q_des=zeros.copy(), dq_des=zeros.copy(), kp=zeros.copy(),
                                     kd=np.full(12, DAMPING_KD), tau_ff=zeros.copy())

@@ -21,16 +21,17 @@ The wire, as the robot has it:
 - ``rt/lowcmd`` (``LowCmd_``): read BestEffort like unitree_sdk2's readers. Every physics
   step (1 kHz) takes whatever is pending, without blocking, and applies the newest command
   if it is valid, as a robot whose KeepLast 1 reader holds only the newest would. The reader
-  keeps :data:`sim.command_intake.COMMAND_HISTORY` samples, not 1, so that every command
-  that arrives is counted: one overtaken by a newer within the same step (which a KeepLast 1
-  reader would overwrite unseen) is counted as superseded, not lost. A command with a bad ``head``,
-  ``level_flag`` or CRC, or motor values a driver refuses, is dropped and counted by reason
-  (:mod:`sim.bridge_stats`); commands still pending when the bridge closes are counted too.
+  keeps :data:`sim.command_intake.COMMAND_HISTORY` samples, so that a command overtaken by
+  a newer within the same step is counted as superseded, not lost. A command with a bad
+  ``head``, ``level_flag`` or CRC, or motor values a driver refuses, is dropped and counted
+  by reason (:mod:`sim.bridge_stats`), as are commands pending when the bridge closes.
   Slots 0 to 11 are mapped to the plant's motors by joint name; the plant's actuators are in
   the SDK's order, as the messages are. What the drivers apply, before the first command
   and when commands stop, is :class:`sim.command_slot.CommandSlot`'s.
 - ``rt/wbc/sim/truth`` (:class:`sim.sim_truth.SimTruth`): the exact state, one sample per
-  ``LowState_`` with the same tick, for evaluation only.
+  ``LowState_`` with its tick (or the bridge's count), for evaluation only.
+- ``config.framing`` other than ``go2``: states framed, and commands applied, as Unitree's
+  C++ or Python simulator does (:mod:`sim.state_framing`): test peers of the project's own.
 
 Pacing: physics step ``k`` starts at ``start + k * dt`` on the clock (deadlines from the
 start: no drift); until then the loop waits on the command reader, taking each command the
@@ -65,17 +66,17 @@ from sim.command_slot import COMMAND, DAMPING, DAMPING_KD, STAND_KD, STAND_KP, C
 from sim.sensors import SimulatedSensors
 from sim.sim_truth import SIM_TRUTH_TOPIC, SimTruthMessage, sim_truth_record
 from sim.simulator import Go2Simulator
+from sim.state_framing import UNITREE_PYTHON, StateFraming, StateGaps
 from sim.truth_log import TruthLog
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES
-from wbc.robot_io.dds.c_layout import LEVEL_FLAG_LOW, LOW_STATE_DTYPE, zero_record
+from wbc.robot_io.dds.c_layout import LOW_STATE_DTYPE, zero_record
 from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
 from wbc.robot_io.dds.low_state_conversion import low_state_from_sensor_record
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
 from wbc.robot_io.sensor_record import SensorRecord
-from wbc.robot_io.unitree_sdk import MODE_ENABLE, SDK_LEG_MOTORS
 
 #: Physics steps the loop may fall behind the clock before it resynchronises (an overrun).
 MAX_LAG_STEPS = 3
@@ -129,8 +130,14 @@ class DdsBridge:
         self._sensors = SimulatedSensors(self.sim, config.sensor_model, seed=config.sensor_seed,
                                          leg_order=LEGS)
         pose_q = self.sim.description.pose(config.pose)[7:]
-        #: What the drivers apply: stand, the newest command, or damping.
-        self.slot = CommandSlot(pose_q[self._to_plant], timeout_s=config.command_timeout_s,
+        #: How states are framed and commands applied (:mod:`sim.state_framing`).
+        self.framing = framing = StateFraming(config.framing)
+        #: The gaps of Unitree's Python simulator's stream (``None`` for other framings).
+        self.gaps = StateGaps(config.sensor_seed) if framing.name == UNITREE_PYTHON else None
+        #: What the drivers apply: stand (no torque for Unitree's simulators), the newest
+        #: command, or damping (never for Unitree's simulators: they hold the last command).
+        self.slot = CommandSlot(None if framing.unitree else pose_q[self._to_plant],
+                                timeout_s=None if framing.unitree else config.command_timeout_s,
                                 delay_steps=config.delay_steps)
         self.stats = BridgeStats()
         #: Python's garbage collection, between physics steps while :meth:`run` runs.
@@ -145,8 +152,7 @@ class DdsBridge:
         self._raw = SensorRecord.zeros()  # plant joint order, description leg order
         self._sensor = SensorRecord.zeros()  # description orders
         self._state = zero_record(LOW_STATE_DTYPE)
-        self._state["level_flag"] = LEVEL_FLAG_LOW
-        self._state["motor_state"]["mode"][:SDK_LEG_MOTORS] = MODE_ENABLE
+        framing.header(self._state)
         self._state_message = LowStateMessage(self._state)
         self._truth_message = SimTruthMessage()
         self._rejected_reasons: set[str] = set()
@@ -293,14 +299,16 @@ class DdsBridge:
             if self.steps % self.config.steps_per_state == 0:
                 self._publish()
             now = self._clock()
-            command = self.slot.update(self._intake.take(now), now_s=now)
+            newest = self.framing.applied(self._intake.take(now), self.sim)
+            command = self.slot.update(newest, now_s=now)
             stats, slot = self.stats, self.slot
             stats.commands_applied, stats.timeouts = slot.applied, slot.timeouts
             stats.commands_in_flight = slot.in_flight
             if slot.transition is not None:  # every change the slot makes is listed
                 self._event(_TRANSITIONS[slot.transition].format(timeout=slot.timeout_s,
                                                                  kd=DAMPING_KD))
-            self.sim.step_actuator_command(command)
+            if self.gaps is None or not self.gaps.physics_halted:
+                self.sim.step_actuator_command(command)
             self.steps += 1
             if self._view is not None:  # no overlay: the hook reads neither argument
                 self._view(None, None)
@@ -308,7 +316,13 @@ class DdsBridge:
     # ------------------------------------------------------------------ inside
 
     def _publish(self) -> None:
-        """Sample the sensors, write ``LowState_``, then the truth with the same tick."""
+        """Sample the sensors, write ``LowState_``, then the truth (in a gap: see StateGaps)."""
+        gap = "" if self.gaps is None else self.gaps.at_state(
+            self.steps * self.config.physics_timestep_s)
+        if gap:
+            if gap == "frozen":
+                self._state_writer.write(self._state_message)
+            return
         self.tick += 1
         raw, sensor = self._raw, self._sensor
         self._sensors.sample(raw)
@@ -322,11 +336,13 @@ class DdsBridge:
         sensor.foot_force[:] = raw.foot_force
         sensor.stamp_s, sensor.tick = raw.stamp_s, self.tick
         low_state_from_sensor_record(sensor, out=self._state)  # SDK orders, CRC
+        self.framing.frame(self._state, sim_time_s=self.sim.time_s)
         # Stamped before the write: a reply can arrive while write() is still returning.
         written_s, written_ns = self._clock(), time.time_ns()
         self._state_writer.write(self._state_message)
         self.stats.published(self.tick, written_s, written_ns)
-        truth = sim_truth_record(self.sim, self.tick, out=self._truth_message.record)
+        truth = sim_truth_record(self.sim, self.framing.state_tick(self._state, self.tick),
+                                 out=self._truth_message.record)
         self._truth_writer.write(self._truth_message)
         if self.truth_log is not None:
             self.truth_log.append(truth)
@@ -371,6 +387,8 @@ class DdsBridge:
             "command_delay_s": config.command_delay_s,
             "command_timeout_s": config.command_timeout_s,
             "stand_kp": STAND_KP, "stand_kd": STAND_KD, "damping_kd": DAMPING_KD,
+            "framing": config.framing,
+            "gaps": None if self.gaps is None else self.gaps.report(),
             "steps": self.steps, "sim_time_s": self.sim.time_s, "wall_time_s": self.wall_s,
             "final_mode": self.mode, "stats": self.stats.as_dict(),
             "gc": self.collector.report(),

@@ -175,6 +175,15 @@ def test_decide_settles_on_fewer_states_and_says_so_at_start():
         "comes from the schedule")
 
 
+def test_one_state_is_taken_to_count_its_tick_unless_it_is_0():
+    one = LowStateStream()
+    fed(one, [state(7)])
+    assert one.decide() == StreamKind(GO2, ticks=True)
+    zero = LowStateStream()
+    fed(zero, [state(7, UNITREE_PYTHON)])
+    assert zero.decide() == StreamKind(UNITREE_PYTHON, ticks=False)
+
+
 def test_foot_force_is_absent_until_a_state_carries_one():
     stream = LowStateStream()
     assert not stream.foot_force_absent  # nothing seen yet

@@ -3,14 +3,21 @@
 
 State: a BestEffort, KeepLast 1 reader (unitree_sdk2's), taken without blocking once a control
 period. The reader holds only the newest ``LowState_``; :meth:`DdsRobot.read_sensors` returns it
-once (``None`` when nothing new came: never a queue of stale states) and counts the ticks it
-never saw. A frame with a wrong ``head`` or CRC is dropped and counted.
+once (``None`` when nothing new came: never a queue of stale states). Every frame goes through
+a :class:`~wbc.robot_io.dds.low_state_stream.LowStateStream`: the stream's kind (a GO2 or
+``go2-wbc bridge``, Unitree's C++ simulator, Unitree's Python simulator) is decided from the
+first states in :meth:`DdsRobot.wait_for_first_state`, which also measures the rate and gives
+the staleness limit (:attr:`DdsRobot.stale_after_s`); the CRC is checked where the stream
+carries one, a new sample is told from a repeat by its tick where the tick counts and by its
+content where it does not, and a frame that fits no kind, or not the stream's, is dropped and
+counted with the reason.
 
-The record's clock: ``tick`` is the robot's own ``LowState_.tick`` (the estimator tells a new
-sample from a repeated one by it); ``stamp_s`` is :attr:`DdsRobot.time_s` when the sample was
-taken from the reader: one monotonic clock (``time.monotonic``, from the robot object's
-creation) for the stamps, the loop's time and the runner's. The robot's tick is not used as a
-clock: its unit differs between a GO2 and a simulator, and it restarts with the robot.
+The record's clock: ``tick`` is the robot's own ``LowState_.tick`` when it counts, else the
+number of new samples since the start (the estimator tells a new sample from a repeated one
+by it); ``stamp_s`` is :attr:`DdsRobot.time_s` when the sample was taken from the reader: one
+monotonic clock (``time.monotonic``, from the robot object's creation) for the stamps, the
+loop's time and the runner's. The robot's tick is not used as a clock: its unit differs
+between a GO2 and a simulator, and it restarts with the robot.
 
 Command: a Reliable, KeepLast 1 writer (unitree_sdk2's) of ``LowCmd_`` with the SDK's header,
 ``reserve`` set to the ``tick`` of the state the command answers (a bridge measures the
@@ -50,7 +57,6 @@ from cyclonedds.util import duration
 
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.model.description import JOINT_NAMES, LEGS
-from wbc.robot_io.dds.c_layout import HEAD, crc_ok
 from wbc.robot_io.dds.domain_config import delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
 from wbc.robot_io.dds.low_cmd_conversion import (
@@ -60,6 +66,7 @@ from wbc.robot_io.dds.low_cmd_conversion import (
 )
 from wbc.robot_io.dds.low_cmd_frame import LowCmdFrame
 from wbc.robot_io.dds.low_state_conversion import sensor_record_from_low_state
+from wbc.robot_io.dds.low_state_stream import RATE_SAMPLES, LowStateStream
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
 from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.sdk_motor_command import SdkMotorCommand
@@ -76,8 +83,9 @@ _TAKE_MAX = 8  # KeepLast 1 holds one; more only if a writer of another instance
 #: Longest wait [s] for the robot's command reader after its first state (discovery on one
 #: host matches both ways within milliseconds).
 MATCH_WAIT_S = 1.0
-_TICK_WRAP = 1 << 32
-_HEAD = np.array(HEAD, dtype=np.uint8)
+#: Longest listening [s] after the first state to decide the stream's kind and measure its
+#: rate on ``RATE_SAMPLES`` new states (0.1 s at 500 Hz, 0.25 s at 200 Hz).
+MEASURE_WAIT_S = 1.0
 
 
 def _topic(participant: Any, name: str, data_type: Any) -> Topic[Any]:
@@ -87,16 +95,6 @@ def _topic(participant: Any, name: str, data_type: Any) -> Topic[Any]:
 
 class NoRobotStateError(WbcError, TimeoutError):
     """No valid ``LowState_`` came in time: no robot or bridge publishes on the domain."""
-
-
-def state_fault(record: np.ndarray) -> str | None:
-    """Why a ``LowState_`` record cannot be used (wrong ``head`` or CRC), or ``None``."""
-    if not np.array_equal(record["head"], _HEAD):
-        head = " ".join(f"{int(b):02X}" for b in record["head"])
-        return f"LowState_.head: expected FE EF, received {head}"
-    if not crc_ok(record):
-        return f"LowState_.crc: 0x{int(record['crc']):08X} does not match the content"
-    return None
 
 
 @dataclass
@@ -109,8 +107,11 @@ class DdsRobotCounters:
     ticks_skipped: int = 0
     #: ``read_sensors`` calls that found nothing new (``None`` returned).
     no_new_state: int = 0
-    #: Frames dropped for a wrong ``head`` or CRC.
+    #: Frames dropped: a wrong ``head`` or CRC, or not the stream's kind (the reason:
+    #: ``last_fault``).
     bad_frames: int = 0
+    #: Frames that repeated the last state (its tick where the tick counts, else its bytes).
+    repeated_states: int = 0
     #: A state whose tick is not after the last one's (robot restarted): used, counted.
     tick_restarts: int = 0
     #: Commands published (in a dry run: built and kept), ``commands_unmatched`` included.
@@ -140,7 +141,7 @@ class DdsRobot:
 
     Example:
         >>> robot = DdsRobot(domain_id=1, interface="lo")
-        >>> robot.wait_for_first_state(5.0)
+        >>> robot.wait_for_first_state(5.0); print(robot.stream.describe())
         >>> loop = ControlLoop(robot, WholeBodyController(control_period_s=0.002))
     """
 
@@ -159,7 +160,8 @@ class DdsRobot:
         self.last_fault = ""
         self._record = SensorRecord.zeros()
         self._pending: np.ndarray | None = None  # a state taken while waiting, not yet read
-        self._last_tick: int | None = None
+        #: The stream's kind, checks, rate and counters (see the module doc).
+        self.stream = LowStateStream()
         self._answer_tick = 0
         self._frame = LowCmdFrame()
         self._cmd_record = self._frame.record
@@ -211,26 +213,36 @@ class DdsRobot:
         record = self._cmd_record
         return np.ndarray((), dtype=record.dtype, buffer=bytearray(record.tobytes()))
 
+    @property
+    def stale_after_s(self) -> float:
+        """The staleness limit [s] the stream's rate measured at the start gives
+        (:func:`~wbc.robot_io.dds.low_state_stream.default_stale_after_s`)."""
+        return self.stream.stale_after_s()
+
+    def stale_reason(self) -> str:
+        """Why no new state came since the last one, for a fault message."""
+        return self.stream.stale_reason(self._clock())
+
     def read_sensors(self) -> SensorRecord | None:
-        """The newest valid state not returned before, or ``None`` (nothing new, or only bad
-        frames). The record is this object's buffer, refilled by the next call."""
+        """The newest new state not returned before, or ``None`` (nothing new: no frame,
+        repeats, or only dropped frames). The record is this object's buffer, refilled by
+        the next call."""
         record = self._take_newest()
         if record is None:
             self.counters.no_new_state += 1
             return None
-        tick = int(record["tick"])
-        if self._last_tick is not None:
-            step = (tick - self._last_tick) % _TICK_WRAP
-            if step == 0:  # the same sample again
-                self.counters.no_new_state += 1
-                return None
-            if step < _TICK_WRAP // 2:
-                self.counters.ticks_skipped += step - 1
-            else:
-                self.counters.tick_restarts += 1
-        self._last_tick = self._answer_tick = tick
         self.counters.states_used += 1
-        return sensor_record_from_low_state(record, stamp_s=self.time_s, out=self._record)
+        return self._sensor_record(record, out=self._record)
+
+    def _sensor_record(self, record: np.ndarray, *,
+                       out: SensorRecord | None = None) -> SensorRecord:
+        """``record`` stamped now, its tick the robot's or the new samples' count (doc)."""
+        self._answer_tick = int(record["tick"])
+        sensor = sensor_record_from_low_state(record, stamp_s=self.time_s, out=out)
+        kind = self.stream.kind
+        if kind is not None and not kind.ticks:
+            sensor.tick = self.stream.counters.new_samples
+        return sensor
 
     def write_command(self, command: MotorCommand) -> None:
         """Publish ``command`` (description order) as a ``LowCmd_`` answering
@@ -255,7 +267,9 @@ class DdsRobot:
     # -- start-up and teardown --------------------------------------------------------------
 
     def wait_for_first_state(self, timeout_s: float = 5.0) -> SensorRecord:
-        """Block until a valid state arrives; it is what the next :meth:`read_sensors` returns.
+        """Block until a valid state arrives, then listen (up to :data:`MEASURE_WAIT_S`) until
+        the stream's kind is decided and its rate measured on ``RATE_SAMPLES`` new states
+        (:attr:`stream`); the newest state is what the next :meth:`read_sensors` returns.
         Then wait, up to :data:`MATCH_WAIT_S` more, until the robot's command reader is matched
         (so that the first commands reach it); a robot without one is logged, not refused.
 
@@ -267,12 +281,19 @@ class DdsRobot:
                 and the interface, what was seen, and asks whether the bridge or robot runs.
         """
         deadline = time.monotonic() + timeout_s
+        newest, stream = None, self.stream
         while True:
             record = self._take_newest()
             if record is not None:
-                self._pending = record
+                if newest is None:  # the first: measure from here
+                    deadline = time.monotonic() + MEASURE_WAIT_S
+                newest = record
+            if newest is not None and (time.monotonic() >= deadline or (
+                    stream.kind is not None and stream.rate_samples >= RATE_SAMPLES)):
+                stream.decide()
+                self._pending = newest
                 self._wait_for_command_reader(MATCH_WAIT_S)
-                return sensor_record_from_low_state(record, stamp_s=self.time_s)
+                return self._sensor_record(newest)
             remaining = deadline - time.monotonic()
             if remaining <= 0.0:
                 raise NoRobotStateError(self._no_state_message(timeout_s))
@@ -287,9 +308,10 @@ class DdsRobot:
             self._waitset.wait(duration(seconds=timeout_s))
         return bool(self._condition.triggered)
 
-    def stats(self) -> dict[str, int]:
-        """The counters as a dict (for reports)."""
-        return asdict(self.counters)
+    def stats(self) -> dict[str, Any]:
+        """The counters as a dict, and the stream's kind, rate and counters under
+        ``stream`` (for reports)."""
+        return {**asdict(self.counters), "stream": self.stream.report()}
 
     def close(self) -> None:
         """Delete the reader and writer and leave the domain; idempotent."""
@@ -342,17 +364,20 @@ class DdsRobot:
             time.sleep(1e-3)
 
     def _take_newest(self) -> np.ndarray | None:
-        """The newest valid state in the reader (or the one a wait took), without blocking."""
+        """The newest new state in the reader (or the one a wait took), without blocking;
+        every frame taken is judged by :attr:`stream` (counted, dropped with its reason)."""
         newest, self._pending = self._pending, None
+        stream, now = self.stream, self._clock()
         for sample in self._reader.take(_TAKE_MAX):
             if not sample.sample_info.valid_data:
                 continue  # a writer went away: an instance state change, no data
-            fault = state_fault(sample.record)
-            if fault is not None:
-                self.counters.bad_frames += 1
-                self.last_fault = fault
-                continue
-            newest = sample.record
+            if stream.accept(sample.record, now):
+                newest = sample.record
+        counters, seen = self.counters, stream.counters
+        if counters.bad_frames != seen.dropped:
+            self.last_fault = stream.last_fault
+        counters.bad_frames, counters.repeated_states = seen.dropped, seen.repeats
+        counters.ticks_skipped, counters.tick_restarts = seen.ticks_skipped, seen.tick_restarts
         return newest
 
     def _refuse(self, reason: str) -> None:

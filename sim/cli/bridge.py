@@ -26,6 +26,7 @@ from sim.command_slot import DAMPING_KD, DEFAULT_COMMAND_TIMEOUT_S, STAND_KD, ST
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from sim.sim_truth import SIM_TRUTH_TOPIC
+from sim.state_framing import FRAMINGS, GO2, UNITREE_PYTHON, UNITREE_PYTHON_RATE_HZ
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
 
@@ -40,11 +41,20 @@ drives them again. The exact state goes out on {SIM_TRUTH_TOPIC}, for evaluation
 (a controller never reads it). For latency statistics a controller echoes the
 tick of the LowState_ it answers in LowCmd_.reserve.
 
+--framing unitree-cpp or unitree-python frames the states and applies the
+commands as Unitree's C++ or Python simulator (unitree_mujoco) does, to validate a
+controller against them: head 00 00, foot_force 0, no stand PD (the robot starts
+lying, no torque until the first command), the last command held (no damping);
+unitree-python also sends crc 0 and tick 0 at 200 Hz with 10-50 ms gaps and turns
+each command into one torque held until the next. The domain does not tell them
+apart: unitree_mujoco's configs use domain 1 on lo too, the default here.
+
 examples:
   go2-wbc bridge                              # domain 1 on lo at 500 Hz, until Ctrl-C
   go2-wbc bridge --rate 1000 --viewer
   go2-wbc bridge --duration 60 --report bridge.json --log truth.npz
   go2-wbc bridge --plant identified --sensors exact --pose lying
+  go2-wbc bridge --framing unitree-python     # as Unitree's Python simulator
 
 """
 EXIT_HELP = f"""\
@@ -58,7 +68,8 @@ exit status:
 _OPTIONS = {"domain_id": "--domain", "interface": "--interface", "rate_hz": "--rate",
             "plant": "--plant-param", "sensors": "--sensor-param",
             "sensor_seed": "--sensor-seed", "command_delay_s": "--command-delay",
-            "command_timeout_s": "--command-timeout", "pose": "--pose"}
+            "command_timeout_s": "--command-timeout", "pose": "--pose",
+            "framing": "--framing"}
 
 
 def _rate(text: str) -> float:
@@ -78,16 +89,20 @@ def add_bridge_command(sub: Any) -> argparse.ArgumentParser:
                             formatter_class=argparse.RawDescriptionHelpFormatter)
     # main() checks the plant of every command that has --plant as an episode
     # (sim.cli.episode_options.check_options), which reads the control rate and the physics
-    # timestep: --rate is the rate a controller runs at, the physics is 1 kHz.
-    bridge.set_defaults(run=run_bridge, parser=bridge, physics_dt=PHYSICS_TIMESTEP_S)
+    # timestep: the plant is checked at the GO2's usual 500 Hz control rate, 1 kHz physics.
+    bridge.set_defaults(run=run_bridge, parser=bridge, physics_dt=PHYSICS_TIMESTEP_S,
+                        control_rate=DEFAULT_RATE_HZ)
     dds = bridge.add_argument_group("DDS")
     add_dds_options(dds, flag_help=None)  # --domain, --interface: as the commands that use it
     add_priority_option(dds, default=BRIDGE_PRIORITY, loop="the physics loop")
-    dds.add_argument("--rate", dest="control_rate", type=_rate, default=DEFAULT_RATE_HZ,
-                     metavar="HZ",
+    dds.add_argument("--rate", dest="state_rate", type=_rate, metavar="HZ",
                      help=f"LowState_ rate [Hz]: 1000 divided by a whole number (default: "
-                          f"{DEFAULT_RATE_HZ:g}, the GO2's usual; 1000 allowed); commands are "
+                          f"{DEFAULT_RATE_HZ:g}, the GO2's usual; {UNITREE_PYTHON_RATE_HZ:g} "
+                          "with --framing unitree-python, as its SIMULATE_DT); commands are "
                           "taken at every 1 ms physics step")
+    dds.add_argument("--framing", choices=tuple(FRAMINGS), default=GO2,
+                     help="frame states and apply commands as a GO2 does, or as Unitree's C++ "
+                          "or Python simulator does (see below; default: go2)")
     sim = bridge.add_argument_group("simulation")
     sim.add_argument("--plant", choices=tuple(PLANT_PRESETS), default=DEFAULT_PLANT,
                      help=f"the simulated GO2's joints and contacts (default: {DEFAULT_PLANT})")
@@ -115,8 +130,9 @@ def add_bridge_command(sub: Any) -> argparse.ArgumentParser:
                      help="time [s] without a valid command before the motors go to damping "
                           f"(default: {DEFAULT_COMMAND_TIMEOUT_S:g}: 50 missed commands at "
                           "500 Hz)")
-    sim.add_argument("--pose", choices=BRIDGE_POSES, default="standing",
-                     help="the pose the robot starts and stands in (default: standing)")
+    sim.add_argument("--pose", choices=BRIDGE_POSES,
+                     help="the pose the robot starts and stands in (default: standing; "
+                          "lying with a Unitree framing, which has no stand PD)")
     sim.add_argument("--duration", type=float_in(0.001, 7 * 86400.0, what="a duration",
                                                  unit="s", fmt="g"),
                      metavar="S", help="stop after S seconds (default: run until Ctrl-C or "
@@ -137,14 +153,18 @@ def add_bridge_command(sub: Any) -> argparse.ArgumentParser:
 
 def bridge_config(args: argparse.Namespace) -> BridgeConfig:
     """The parsed options as a :class:`BridgeConfig`; a bad one is a usage error (exit 2)."""
+    unitree = args.framing != GO2
+    rate = args.state_rate or (UNITREE_PYTHON_RATE_HZ if args.framing == UNITREE_PYTHON
+                                 else DEFAULT_RATE_HZ)
     try:
         return BridgeConfig(
-            domain_id=args.domain, interface=args.interface, rate_hz=args.control_rate,
+            domain_id=args.domain, interface=args.interface, rate_hz=rate,
             plant=Plant.preset(args.plant).with_params(**dict(args.plant_param)),
             sensors=SensorModel.preset(args.sensors).with_params(**dict(args.sensor_param)),
             sensor_seed=args.sensor_seed, command_delay_s=args.command_delay,
-            command_timeout_s=args.command_timeout, pose=args.pose, viewer=args.viewer,
-            log_truth=args.log is not None)
+            command_timeout_s=args.command_timeout,
+            pose=args.pose or ("lying" if unitree else "standing"), viewer=args.viewer,
+            log_truth=args.log is not None, framing=args.framing)
     except ConfigurationError as err:
         field, _, detail = str(err).partition(": ")
         option = _OPTIONS.get(field)
@@ -220,14 +240,20 @@ def _header(config: BridgeConfig, duration_s: float | None) -> list[str]:
     until = "Ctrl-C or SIGTERM" if duration_s is None else f"{duration_s:g} s have passed"
     delay = (f"; commands applied {config.command_delay_s * 1e3:g} ms after they are taken"
              if config.delay_steps else "")
+    if config.framing == GO2:
+        drivers = (f"{config.pose} on the bridge's joint PD (kp {STAND_KP:g}, kd {STAND_KD:g}) "
+                   f"until the first valid command; damping (kd {DAMPING_KD:g}) after "
+                   f"{config.command_timeout_s:g} s without one")
+    else:
+        drivers = (f"{config.pose}, no torque until the first valid command; the last one "
+                   "held (no damping)")
     return [
         (f"bridge: DDS domain {config.domain_id} on {config.interface}: {LOW_STATE_TOPIC} at "
          f"{config.rate_hz:g} Hz and {SIM_TRUTH_TOPIC} out, {LOW_CMD_TOPIC} in"),
+        f"framing {config.framing}: {FRAMINGS[config.framing]}",
         f"{config.plant_model.describe()}; physics {config.physics_timestep_s * 1e3:g} ms"
         + delay,
         f"{config.sensor_model.describe()}, seed {config.sensor_seed}",
-        (f"{config.pose} on the bridge's joint PD (kp {STAND_KP:g}, kd {STAND_KD:g}) until the "
-         f"first valid command; damping (kd {DAMPING_KD:g}) after "
-         f"{config.command_timeout_s:g} s without one"),
+        drivers,
         f"running until {until}",
     ]

@@ -46,6 +46,18 @@ examples:
 a real GO2 needs domain 0 on the interface of its Ethernet link, sport mode released first
 (Unitree's MotionSwitcher), a hoist for the first tests, and a --dry-run before anything.
 
+the stream: the first states say which kind of robot sends them (printed at start): a GO2
+or go2-wbc bridge (head FE EF, CRC checked, new samples by their tick), Unitree's C++
+simulator (head 00 00, CRC checked) or Unitree's Python simulator (head 00 00, crc 0 and
+tick 0: new samples by their content). A frame of another kind, or with a wrong CRC, is
+dropped and counted; a stream that keeps arriving but never changes is named in the fault.
+
+staleness: one limit, for the loop's watchdog and the estimator's trust limit alike: without
+a new state for that long the controller's safe command is sent and the running goal ends
+ABORTED. By default it is 20 periods of the state rate measured at start, or twice the
+longest gap seen then, within [20, 250] ms: 40 ms at 500 Hz, 100 ms at 200 Hz, where
+Unitree's Python simulator has gaps of 10 to 50 ms. --stale-after S sets it.
+
 """
 
 
@@ -82,8 +94,9 @@ def add_run_command(sub: Any) -> None:
                           "then answers each state within about the tick's own time)")
     dds.add_argument("--stale-after", type=float_in(0.001, 1.0, what="a time", unit="s",
                                                     fmt="g"),
-                     metavar="S", help="send the safe command after this long without a fresh "
-                                       "state [s] (default: the estimator's trust_timeout_s)")
+                     metavar="S", help="send the safe command after this long without a new "
+                                       "state [s], the watchdog's and the estimator's limit "
+                                       "(default: from the rate measured at start, see below)")
     dds.add_argument("--estimator", choices=tuple(ESTIMATORS), default=DEFAULT_ESTIMATOR,
                      help=f"the state estimator (default: {DEFAULT_ESTIMATOR})")
     dds.add_argument("--estimator-param", type=estimator_param, action="append", default=[],
@@ -122,11 +135,14 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         out.flush()
 
     period_s = 1.0 / args.control_rate
+    params = dict(args.estimator_param)
+    if "trust_timeout_s" in params:
+        args.parser.error("--estimator-param: trust_timeout_s: set by --stale-after (one limit "
+                          "for the watchdog and the estimator)")
     robot = bridge = None
     try:
         try:
-            estimator = make_estimator(args.estimator, control_period_s=period_s,
-                                       **dict(args.estimator_param))
+            make_estimator(args.estimator, control_period_s=period_s, **params)
         except ConfigurationError as err:
             args.parser.error(f"--estimator-param: {err}")
         robot = DdsRobot(domain_id=args.domain, interface=args.interface, dry_run=args.dry_run)
@@ -137,11 +153,22 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         except NoRobotStateError as err:
             print(f"go2-wbc: {err}", file=sys.stderr)
             return EXIT_UNAVAILABLE
+        say(robot.stream.describe())
+        stale_after_s = args.stale_after or robot.stale_after_s
+        say(f"staleness limit {stale_after_s * 1e3:.0f} ms (watchdog and estimator) "
+            + ("from --stale-after" if args.stale_after else
+               "from the rate measured at start (--stale-after to change it)"))
+        if robot.stream.foot_force_absent and "use_foot_force" not in params:
+            params["use_foot_force"] = False
+            say("foot_force is 0 in every state (as Unitree's simulators send): foot contact "
+                "from the schedule only (estimator use_foot_force=false)")
+        estimator = make_estimator(args.estimator, control_period_s=period_s,
+                                   trust_timeout_s=stale_after_s, **params)
         loop = ControlLoop(robot, WholeBodyController(control_period_s=period_s),
                            estimator=estimator)
         bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
         rt = RealtimeLoop(loop, rate_hz=args.control_rate, bridge=bridge,
-                          stale_after_s=args.stale_after,
+                          stale_after_s=stale_after_s,
                           align_s=0.0 if args.no_align else None,
                           rest=RestSettings(stand_on_start=not args.no_stand))
         log = TickLog() if args.log is not None else None

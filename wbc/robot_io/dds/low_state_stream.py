@@ -157,9 +157,12 @@ class LowStateStream:
 
     def decide(self) -> StreamKind | None:
         """Decide the kind now from the frames seen (all of them when fewer than
-        ``classify_states`` came); ``None`` if no frame of any framing came."""
+        ``classify_states`` came: one frame's tick counts unless it is 0); ``None`` if no
+        frame of any framing came."""
         if self.kind is None and self._framing is not None:
-            self.kind = StreamKind(self._framing, ticks=len(set(self._window)) > 1)
+            # One sample cannot show the tick counting: a tick other than 0 is taken to.
+            ticks = set(self._window)
+            self.kind = StreamKind(self._framing, ticks=len(ticks) > 1 or ticks != {0})
         return self.kind
 
     def _new_sample(self, record: np.ndarray, tick: int, content: bytes, now_s: float,
