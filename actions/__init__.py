@@ -1,4 +1,7 @@
-"""Actions with ROS 2 semantics, without ROS: goals, feedback, cancellation, results."""
+"""Actions with ROS 2 semantics, without ROS: goals, feedback, cancellation, results; and the
+robot loop they run in (:class:`RobotInterface`, :class:`ControlLoop`)."""
+
+from typing import TYPE_CHECKING, Any
 
 from actions.action_client import ActionClient, ActionTimeoutError, RunnerStalledError
 from actions.action_definition import (
@@ -73,6 +76,33 @@ from actions.ros_interfaces.trajectory_msgs import (
     MultiDOFJointTrajectoryPoint,
 )
 
+if TYPE_CHECKING:
+    from actions.robot.control_loop import ControlLoop
+    from actions.robot.robot_interface import MappedRobot, RobotInterface, TrueState, check_robot
+
+#: The robot loop's names, imported on first use: the loop pulls in the controller, which a
+#: process that only sends goals (``go2-wbc high-five --dds``) does not need (~1.7 s).
+_ROBOT_LOOP = {
+    "ControlLoop": "actions.robot.control_loop",
+    "MappedRobot": "actions.robot.robot_interface",
+    "RobotInterface": "actions.robot.robot_interface",
+    "TrueState": "actions.robot.robot_interface",
+    "check_robot": "actions.robot.robot_interface",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _ROBOT_LOOP:
+        import importlib
+
+        return getattr(importlib.import_module(_ROBOT_LOOP[name]), name)
+    raise AttributeError(f"module 'actions' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_ROBOT_LOOP})
+
+
 __all__ = [
     "ACTION_TYPES",
     "FOLLOW_JOINT_TRAJECTORY",
@@ -94,6 +124,7 @@ __all__ = [
     "CancelReturnCode",
     "ClientGoalHandle",
     "ConstantSpec",
+    "ControlLoop",
     "Duration",
     "Event",
     "FeedbackMessage",
@@ -114,12 +145,14 @@ __all__ = [
     "JointTolerance",
     "JointTrajectory",
     "JointTrajectoryPoint",
+    "MappedRobot",
     "MessageDefinition",
     "MultiDOFJointTrajectory",
     "MultiDOFJointTrajectoryPoint",
     "Quaternion",
     "Rejection",
     "RejectionCode",
+    "RobotInterface",
     "RunnerStalledError",
     "SitFeedback",
     "SitGoal",
@@ -130,12 +163,14 @@ __all__ = [
     "StepResult",
     "Time",
     "Transform",
+    "TrueState",
     "Twist",
     "UnknownFieldError",
     "Vector3",
     "WrappedResult",
     "action_type_named",
     "as_duration",
+    "check_robot",
     "check_transition",
     "legal_next_statuses",
     "parse_action_file",

@@ -11,6 +11,12 @@ encoders, and no foot-force sensors, so the estimator takes contact from the con
 schedule alone (``use_foot_force=False``). ``ControlLoop`` wires it to the state estimator,
 the controller and the action servers by joint name, as it would a real GO2; a HighFive
 goal then runs on it.
+
+Orders: the plant declares its own (``joint_names``, ``leg_names``: the Unitree SDK's here),
+fills its records in them (``SensorRecord.zeros(UNITREE_SDK_ORDERS)``) and gets its commands
+in them (``command.orders``). The loop checks both ways and refuses a mismatch, naming both
+orders: a record already in the description's order (what ``wbc.sensor_record_from_message``
+returns) from a plant that declares the SDK's would otherwise have its feet swapped.
 """
 
 from __future__ import annotations
@@ -20,24 +26,28 @@ import re
 import mujoco
 import numpy as np
 
-from actions import GoalStatus, HighFiveGoal
-from actions.robot.control_loop import ControlLoop
-from wbc import Go2Description, MotorCommand, SensorRecord, WholeBodyController, make_estimator
-from wbc.model.description import UNITREE_SDK_JOINT_NAMES
-
-#: The SDK's leg order, which this plant's foot array would use (it has no foot sensors).
-SDK_LEGS = ("FR", "FL", "RR", "RL")
+from actions import ControlLoop, GoalStatus, HighFiveGoal
+from wbc import (
+    UNITREE_SDK_JOINT_NAMES,
+    UNITREE_SDK_LEGS,
+    UNITREE_SDK_ORDERS,
+    Go2Description,
+    MotorCommand,
+    SensorRecord,
+    WholeBodyController,
+    make_estimator,
+)
 
 
 class UrdfGo2:
     """A GO2 in MuJoCo, built from the URDF, spoken to as a real robot is.
 
-    The :class:`actions.RobotInterface` is four members: ``joint_names`` and ``leg_names``
+    The :class:`actions.RobotInterface` is five members: ``joint_names`` and ``leg_names``
     (the orders of its arrays), ``time_s``, ``read_sensors()`` and ``write_command()``.
     """
 
     joint_names = UNITREE_SDK_JOINT_NAMES   # motors FR, FL, RR, RL: mapped by name
-    leg_names = SDK_LEGS
+    leg_names = UNITREE_SDK_LEGS            # its foot array's order (it has no foot sensors)
 
     def __init__(self, *, control_period_s: float = 1e-3, timestep_s: float = 1e-3):
         description = Go2Description.default()
@@ -66,13 +76,12 @@ class UrdfGo2:
         self._effort = np.array([description.effort_limit[description.joint_index(n)]
                                  for n in self.joint_names])
         self._substeps = round(control_period_s / timestep_s)
-        self._record = SensorRecord.zeros()
+        self._record = SensorRecord.zeros(UNITREE_SDK_ORDERS)  # its records say their orders
         q = description.pose("standing")  # Pinocchio's (x, y, z, w) -> MuJoCo's (w, x, y, z)
         self.data.qpos[:7] = [*q[:3], q[6], *q[3:6]]
         self.data.qpos[self._qpos] = [q[7 + description.joint_index(n)]
                                       for n in self.joint_names]
         mujoco.mj_forward(self.model, self.data)
-        self._command = MotorCommand.pure_torque(np.zeros(12))
 
     @property
     def time_s(self) -> float:
@@ -91,7 +100,10 @@ class UrdfGo2:
 
     def write_command(self, command: MotorCommand) -> None:
         """The drivers' law ``tau_ff + kp (q_des - q) + kd (dq_des - dq)`` every physics
-        step of the control period, clipped at the effort limits."""
+        step of the control period, clipped at the effort limits; ``command`` arrives in
+        this plant's order (the loop mapped it by name)."""
+        command.orders.check(UNITREE_SDK_ORDERS, what="write_command", legs=False,
+                             fix="send it through the ControlLoop, which maps it by name")
         for _ in range(self._substeps):
             q, dq = self.data.qpos[self._qpos], self.data.qvel[self._dof]
             tau = (command.tau_ff + command.kp * (command.q_des - q)

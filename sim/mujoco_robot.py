@@ -8,6 +8,7 @@ from sim.sensors import DEFAULT_SENSORS, SensorModel, SimulatedSensors
 from sim.simulator import Go2Simulator
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
+from wbc.model.orders import Orders
 from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.sensor_record import SensorRecord
 
@@ -39,7 +40,9 @@ class MujocoRobot:
         self._reorder = not np.array_equal(self._order, np.arange(len(self._order)))
         legs = dict.fromkeys(name.split("_")[0] for name in self.joint_names)
         self.sensors = SimulatedSensors(sim, sensors, seed=sensor_seed, leg_order=tuple(legs))
-        self._record = SensorRecord.zeros()
+        #: The orders of its records and commands (the actuators', the feet's).
+        self.orders = Orders.of(self.joint_names, self.leg_names, name="the plant's actuator")
+        self._record = SensorRecord.zeros(self.orders)
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -70,7 +73,15 @@ class MujocoRobot:
         return q, v
 
     def write_command(self, command: MotorCommand) -> None:
-        """A motor command in actuator order; advances one control period."""
+        """A motor command in actuator order; advances one control period.
+
+        Raises:
+            OrderMismatchError: ``command`` in another joint order than the actuators'.
+        """
+        if command.orders is not self.orders:
+            command.orders.check(self.orders, what="MujocoRobot.write_command(command)",
+                                 legs=False, fix="send it through MappedRobot (a ControlLoop "
+                                 "does), which maps the controller's command by name")
         self.sim.step_actuator_command(command, self.substeps)
 
 

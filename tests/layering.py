@@ -33,7 +33,7 @@ FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 PACKAGES = ("wbc", "tasks", "actions", "sim", "benchmarks")
 #: Package ``__init__`` modules that re-export names for users.
-FACADES = ("wbc", "tasks", "actions", "wbc.backends")
+FACADES = ("wbc", "tasks", "actions", "actions.robot", "wbc.backends")
 #: Packages inside which an import cycle is tolerated for now: the QP backend registry
 #: (``wbc.backends.backend``) imports the backends it registers, which import it back.
 TOLERATED_CYCLES = ("wbc.backends",)

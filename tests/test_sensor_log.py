@@ -100,8 +100,9 @@ def test_a_log_without_sensor_arrays_or_samples_is_refused(tmp_path):
 def test_a_loop_states_what_it_cannot_do(logged):
     path, _ = logged
     robot = RecordedRobot(SensorLog.load(path))
-    with pytest.raises(ConfigurationError, match=r"^state: RecordedRobot reports sensors only, "
-                                                 r"not its exact state; estimate it"):
+    with pytest.raises(ConfigurationError, match=r"^robot: RecordedRobot lacks read_state\(\) .*"
+                                                 r"it reports sensors only, not its exact "
+                                                 r"state .*: estimate it with state='estimate'"):
         ControlLoop(robot, WholeBodyController(), state="truth")
     with pytest.raises(ConfigurationError, match=r"^estimator: given with state='truth'"):
         ControlLoop.simulated(state="truth", estimator=make_estimator())

@@ -213,8 +213,8 @@ def test_a_robot_in_the_sdk_order_reports_in_its_orders_and_is_mapped_by_name():
     for order in (None, UNITREE_SDK_JOINT_NAMES):
         sim = Go2Simulator(actuator_order=order)
         robot = MujocoRobot(sim, sensors="exact")
-        for _ in range(50):
-            robot.write_command(MotorCommand.pure_torque(np.zeros(12)))
+        for _ in range(50):  # a command in the plant's own order: its orders say so
+            robot.write_command(MotorCommand.pure_torque(np.zeros(12), orders=robot.orders))
         mapped.append(MappedRobot(robot).read_sensors().copy())
         if order is not None:
             assert robot.leg_names == UNITREE_SDK_LEGS

@@ -32,6 +32,7 @@ from wbc.core.errors import (
     ConfigurationError,
     DescriptionNotFoundError,
     NonFiniteError,
+    OrderMismatchError,
     ReachabilityError,
     UnknownNameError,
     WbcError,
@@ -41,9 +42,18 @@ from wbc.estimation.estimators import make_estimator
 from wbc.estimation.invariant_ekf import InvariantEkf, InvariantEkfConfig
 from wbc.estimation.state_estimate import StateEstimate
 from wbc.estimation.state_estimator import StateEstimator
-from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
+from wbc.model.description import (
+    FOOT_FRAMES,
+    FOOT_RADIUS_M,
+    JOINT_NAMES,
+    LEGS,
+    UNITREE_SDK_JOINT_NAMES,
+    UNITREE_SDK_LEGS,
+    Go2Description,
+)
 from wbc.model.joint_map import JointMap
 from wbc.model.leg_kinematics import LegKinematics
+from wbc.model.orders import DESCRIPTION_ORDERS, UNITREE_SDK_ORDERS, Orders
 from wbc.model.support_polygon import SupportPolygon
 from wbc.motions.leg_lift import LegLift, LegLiftTiming, LiftPhase
 from wbc.robot_io.motor_command import MotorCommand
@@ -52,10 +62,14 @@ from wbc.robot_io.sdk_motor_command import SdkMotorCommand
 from wbc.robot_io.sensor_record import SensorRecord
 
 __all__ = [
+    "DESCRIPTION_ORDERS",
     "FOOT_FRAMES",
     "FOOT_RADIUS_M",
     "JOINT_NAMES",
     "LEGS",
+    "UNITREE_SDK_JOINT_NAMES",
+    "UNITREE_SDK_LEGS",
+    "UNITREE_SDK_ORDERS",
     "BalanceController",
     "ConfigurationError",
     "ContactSchedule",
@@ -79,6 +93,8 @@ __all__ = [
     "LimitSettings",
     "MotorCommand",
     "NonFiniteError",
+    "OrderMismatchError",
+    "Orders",
     "PlacoController",
     "ProblemBuilder",
     "ReachabilityError",

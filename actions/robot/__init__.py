@@ -1,4 +1,37 @@
 """The robot loop: the robot interface, the control loop that reads the robot, estimates its
 state, ticks the actions and writes the motor command (a simulator or a real GO2), a
 recorded robot.
+
+``from actions.robot import ControlLoop, RobotInterface`` (or ``from actions import ...``):
+the names below are imported on first use, so that a module of this package imported alone
+(the robot interface, in the simulator's processes) does not pull in the controller.
 """
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from actions.robot.control_loop import ControlLoop
+    from actions.robot.robot_interface import MappedRobot, RobotInterface, TrueState, check_robot
+
+_EXPORTS = {
+    "ControlLoop": "actions.robot.control_loop",
+    "MappedRobot": "actions.robot.robot_interface",
+    "RobotInterface": "actions.robot.robot_interface",
+    "TrueState": "actions.robot.robot_interface",
+    "check_robot": "actions.robot.robot_interface",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        import importlib
+
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'actions.robot' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})
+
+
+__all__ = ["ControlLoop", "MappedRobot", "RobotInterface", "TrueState", "check_robot"]

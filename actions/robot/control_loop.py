@@ -15,7 +15,12 @@ from actions.action_client import ActionClient
 from actions.action_runner import ActionRunner, BusyPolicy
 from actions.go2.go2_actions import make_go2_runner
 from actions.go2.robot_context import RobotContext
-from actions.robot.robot_interface import STATE_SOURCES, MappedRobot, RobotInterface
+from actions.robot.robot_interface import (
+    STATE_SOURCES,
+    MappedRobot,
+    RobotInterface,
+    check_robot,
+)
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.control_output import ControlOutput
 from wbc.core.errors import ConfigurationError
@@ -69,11 +74,14 @@ class ControlLoop:
 
         Raises:
             UnknownNameError: An unknown ``state``.
-            ConfigurationError: ``truth`` from a robot that does not know its exact state or
+            ConfigurationError: A robot that lacks a member or does not declare its
+                orders (:func:`~actions.robot.robot_interface.check_robot`: every missing
+                one named); ``truth`` from a robot that does not know its exact state or
                 with an estimator, or a first sample the estimator cannot start from (the
                 field named).
         """
         check_name("state source", state, STATE_SOURCES)
+        check_robot(robot, state=state)  # every missing member named, before any is used
         if state == "truth" and estimator is not None:
             raise ConfigurationError(
                 "estimator: given with state='truth', which reads no sensors; give "

@@ -7,6 +7,14 @@ leg name, to the description order the controller and the estimator use. Swappin
 simulator for the real robot changes the interface object and its names, not the behaviour
 code.
 
+Each record and command carries its orders (:class:`wbc.model.orders.Orders`): a robot
+declares its ``joint_names`` and ``leg_names``, fills its records in those orders
+(``SensorRecord.zeros(Orders.of(joint_names, leg_names))``), and :class:`MappedRobot`
+refuses a record or command in any other, naming both (a record already mapped to the
+description's, from :func:`wbc.sensor_record_from_message`, returned by a robot that declares
+the Unitree SDK's orders, would otherwise have its feet swapped). :func:`check_robot`, run
+when a control loop starts, lists what a robot lacks.
+
 A robot reports what it measures, a :class:`wbc.SensorRecord` per control period (IMU,
 joint encoders and torques, foot-force counts), never its base position or velocity, which
 a real GO2 does not measure: the control loop's state estimator turns the records into the
@@ -21,9 +29,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from wbc.core.errors import ConfigurationError
-from wbc.core.validation import as_vector, check_name
-from wbc.model.description import JOINT_NAMES, LEGS
+from wbc.core.validation import as_vector
 from wbc.model.joint_map import JointMap
+from wbc.model.orders import DESCRIPTION_ORDERS, Orders
 from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.sensor_record import SensorRecord
 
@@ -34,7 +42,14 @@ STATE_SOURCES = ("estimate", "truth")
 
 @runtime_checkable
 class RobotInterface(Protocol):
-    """A robot in its own joint and leg orders."""
+    """A robot in its own joint and leg orders: five members, ``joint_names``,
+    ``leg_names``, ``time_s``, ``read_sensors()`` and ``write_command()``.
+
+    Its records carry the orders it declares (``SensorRecord.zeros(Orders.of(joint_names,
+    leg_names))``), its commands arrive in them. A robot without sensors that knows its
+    exact state (:class:`TrueState`) runs with ``state="truth"`` instead of
+    ``read_sensors()``.
+    """
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -51,11 +66,13 @@ class RobotInterface(Protocol):
     def read_sensors(self) -> SensorRecord | None:
         """This period's sensor sample in the robot's orders, or ``None`` if none came.
 
-        The record may be the robot's own buffer, refilled by the next call.
+        The record may be the robot's own buffer, refilled by the next call. Its
+        ``orders`` are the robot's declared ones (checked).
         """
 
     def write_command(self, command: MotorCommand) -> None:
-        """Hand the motor drivers one command (arrays (12,) in the robot's order).
+        """Hand the motor drivers one command (arrays (12,) in the robot's order, which
+        ``command.orders`` names).
 
         The drivers apply ``tau_ff + kp (q_des - q) + kd (dq_des - dq)`` until the next
         command, one control period later. A plant that takes bare torques applies
@@ -69,6 +86,74 @@ class TrueState(Protocol):
 
     def read_state(self) -> tuple[np.ndarray, np.ndarray]:
         """``(q (19,), v (18,))``: Pinocchio-convention base, joints in the robot's order."""
+
+
+#: The :class:`RobotInterface`'s members, methods with their parentheses.
+ROBOT_MEMBERS = ("joint_names", "leg_names", "time_s", "read_sensors()", "write_command()")
+#: What a robot declares so that its arrays are mapped by name, ending a refusal.
+DECLARE_ORDERS = (
+    "declare joint_names and leg_names, the orders of its joint and foot-force arrays "
+    "(wbc.JOINT_NAMES and wbc.LEGS for the description's, wbc.UNITREE_SDK_JOINT_NAMES and "
+    "wbc.UNITREE_SDK_LEGS for the Unitree SDK's)")
+
+
+def check_robot(robot: object, *, state: str = "estimate") -> None:
+    """Refuse, in one line, a robot that lacks a member the control loop uses.
+
+    With ``state="estimate"`` (the default) those are :data:`ROBOT_MEMBERS`; with
+    ``"truth"``, ``read_state()`` (:class:`TrueState`) instead of ``read_sensors()``. The
+    message lists every missing member, points a robot without sensors that knows its exact
+    state to ``state="truth"``, and says what to declare for the orders.
+
+    Raises:
+        ConfigurationError: ``"robot: OldGo2 lacks read_sensors() of the RobotInterface
+            (joint_names, leg_names, time_s, read_sensors(), write_command()); ..."``.
+    """
+    truth = state == "truth"
+    members = tuple(("read_state()" if m == "read_sensors()" else m) if truth else m
+                    for m in ROBOT_MEMBERS)
+
+    def lacks(member: str) -> bool:
+        name = member.removesuffix("()")
+        if not hasattr(robot, name):
+            return True
+        return member.endswith("()") and not callable(getattr(robot, name))
+
+    missing = [m for m in members if lacks(m)]
+    if not missing:
+        return
+    kind = "RobotInterface and TrueState" if truth else "RobotInterface"
+    notes = [(f"robot: {type(robot).__name__} lacks {', '.join(missing)} of the {kind} "
+              f"({', '.join(members)})")]
+    if "read_sensors()" in missing:
+        notes.append("it has read_state(): a robot without sensors runs on its exact state "
+                     "with state='truth'" if not lacks("read_state()") else
+                     "a robot without sensors that knows its exact state (read_state()) "
+                     "runs with state='truth'")
+    if "read_state()" in missing:
+        notes.append("it reports sensors only, not its exact state (which only a simulator "
+                     "knows): estimate it with state='estimate' (the default) instead of "
+                     "'truth'")
+    if "joint_names" in missing or "leg_names" in missing:
+        notes.append(DECLARE_ORDERS)
+    raise ConfigurationError("; ".join(notes))
+
+
+def declared_orders(robot: object) -> Orders:
+    """The orders ``robot`` declares (``joint_names``, ``leg_names``), interned.
+
+    Raises:
+        ConfigurationError: It declares none (one line saying what to declare), or names
+            that are not 12 distinct joints and the four legs once each.
+    """
+    if not (hasattr(robot, "joint_names") and hasattr(robot, "leg_names")):
+        raise ConfigurationError(
+            f"robot: {type(robot).__name__} does not declare its orders: {DECLARE_ORDERS}")
+    try:
+        return Orders.of(tuple(robot.joint_names), tuple(robot.leg_names),
+                         name=f"{type(robot).__name__}'s")
+    except (ConfigurationError, TypeError) as err:
+        raise ConfigurationError(f"robot: {type(robot).__name__}.{err}") from err
 
 
 class RobotWrapper:
@@ -109,25 +194,30 @@ class RobotWrapper:
 class MappedRobot:
     """A :class:`RobotInterface` seen in the description's joint and leg orders.
 
+    Checks the orders both ways: a record the robot returns must be in its declared orders
+    (:attr:`robot_orders`), a command it is given in the description's; either mismatch
+    raises :class:`~wbc.core.errors.OrderMismatchError` naming both.
+
     Args:
         robot: The robot, in its own orders.
         aliases: Its joint names mapped to the description's, where they differ.
+
+    Raises:
+        ConfigurationError: A robot that does not declare its orders, or declares names
+            that are not the GO2's joints and legs.
     """
 
     def __init__(self, robot: RobotInterface, *, aliases: dict[str, str] | None = None):
         self.robot = robot
-        self.joint_map = JointMap(robot.joint_names, aliases=aliases)
-        #: The robot's order is the description's: arrays are copied, not reordered.
-        self._same_order = bool(np.array_equal(self.joint_map.index, np.arange(len(JOINT_NAMES))))
-        legs = tuple(getattr(robot, "leg_names", LEGS))
-        for leg in legs:
-            check_name("leg", leg, LEGS)
-        if sorted(legs) != sorted(LEGS):
-            raise ConfigurationError(
-                f"leg_names: expected each of {', '.join(LEGS)} once, received {list(legs)}")
-        #: ``robot foot_force[i]`` is the description's leg ``leg_index[i]``.
-        self._leg_inverse = np.argsort(np.array([LEGS.index(leg) for leg in legs]))
-        self._same_legs = legs == LEGS
+        #: The orders the robot declares, which its records carry.
+        self.robot_orders = declared_orders(robot)
+        self.joint_map = JointMap(self.robot_orders.joint_names, aliases=aliases)
+        #: The robot's arrays are the description's, names included: passed, not mapped.
+        self._same_order = self.robot_orders is DESCRIPTION_ORDERS
+        legs = self.robot_orders.leg_names
+        #: ``description foot_force[j] = robot foot_force[_leg_inverse[j]]``.
+        self._leg_inverse = np.argsort(np.array([DESCRIPTION_ORDERS.leg_names.index(leg)
+                                                 for leg in legs]))
         self._record = SensorRecord.zeros()
 
     @property
@@ -148,6 +238,7 @@ class MappedRobot:
 
         Raises:
             ConfigurationError: The robot returned something that is not a record.
+            OrderMismatchError: A record in other orders than the robot declares.
         """
         record = self.robot.read_sensors()
         if record is None:
@@ -156,7 +247,13 @@ class MappedRobot:
             raise ConfigurationError(
                 f"read_sensors: expected a SensorRecord or None, received "
                 f"{type(record).__name__}")
-        if self._same_order and self._same_legs:
+        if record.orders is not self.robot_orders:
+            record.orders.check(
+                self.robot_orders, what=f"{type(self.robot).__name__}.read_sensors()",
+                fix="return records in the orders it declares (fill "
+                    "SensorRecord.zeros(Orders.of(joint_names, leg_names))), or declare "
+                    "the orders its records are in")
+        if self._same_order:
             return record
         mapped = self._record
         mapped.stamp_s, mapped.tick = record.stamp_s, record.tick
@@ -189,8 +286,18 @@ class MappedRobot:
         return q, v
 
     def write_command(self, command: MotorCommand) -> None:
-        """A motor command in the description order, sent in the robot's order (a copy)."""
+        """A motor command in the description order, sent in the robot's order (a copy).
+
+        Raises:
+            OrderMismatchError: ``command`` is in another joint order (already the robot's).
+        """
+        if command.orders is not DESCRIPTION_ORDERS:
+            command.orders.check(
+                DESCRIPTION_ORDERS, what="write_command(command)", legs=False,
+                fix="pass the controller's command as it is (the description's order): "
+                    "this robot maps it to its own by name")
         if self._same_order:
             self.robot.write_command(command.copy())
         else:
-            self.robot.write_command(command.reordered(self.joint_map.index))
+            self.robot.write_command(command.reordered(self.joint_map.index,
+                                                       orders=self.robot_orders))

@@ -29,3 +29,10 @@ class ReachabilityError(ConfigurationError):
 
 class NonFiniteError(ConfigurationError):
     """A NaN or infinite value in a state, reference or parameter."""
+
+
+class OrderMismatchError(ConfigurationError):
+    """A record or command in one joint or leg order handed where another is expected.
+
+    The message names both orders and the conversion to use.
+    """

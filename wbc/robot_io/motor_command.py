@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
+
+from wbc.model.orders import DESCRIPTION_ORDERS, Orders
 
 _VECTOR = numba.float64[:]
 
@@ -66,8 +68,13 @@ class MotorCommand:
     the plan's model did not know (joint friction, damping, rotor inertia) between ticks.
     ``kp = kd = 0`` is pure torque control.
 
-    Arrays are (12,) in one joint order: the description's (FL, FR, RL, RR x hip, thigh,
-    calf) when it comes from a controller; a robot's own order after :meth:`reordered`.
+    Arrays are (12,) in one joint order, :attr:`orders`: the description's (FL, FR, RL, RR x
+    hip, thigh, calf) when it comes from a controller; a robot's own order after
+    :meth:`reordered`. A command built without ``orders`` is in the description's, as every
+    command a controller makes; the conversions to another order
+    (:meth:`~wbc.robot_io.sdk_motor_command.SdkMotorCommand.from_control_output`,
+    :class:`actions.MappedRobot`) check it, so that a command already in a robot's order is
+    refused rather than reordered a second time.
     """
 
     #: Desired joint positions [rad].
@@ -80,14 +87,18 @@ class MotorCommand:
     kd: np.ndarray
     #: Feed-forward torques [N m].
     tau_ff: np.ndarray
+    #: The joint order of the arrays (its legs unused: a command has no foot array).
+    orders: Orders = field(default=DESCRIPTION_ORDERS, kw_only=True)
 
     @classmethod
-    def pure_torque(cls, tau: np.ndarray) -> MotorCommand:
-        """A command that applies ``tau`` [N m] whatever the state (zero gains)."""
+    def pure_torque(cls, tau: np.ndarray, *, orders: Orders = DESCRIPTION_ORDERS
+                    ) -> MotorCommand:
+        """A command that applies ``tau`` [N m] (in ``orders``) whatever the state (zero
+        gains)."""
         tau = np.asarray(tau, dtype=float)
         zeros = np.zeros_like(tau)
         return cls(q_des=zeros, dq_des=zeros.copy(), kp=zeros.copy(), kd=zeros.copy(),
-                   tau_ff=tau.copy())
+                   tau_ff=tau.copy(), orders=orders)
 
     def torque_at(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
         """The torque [N m] the drivers apply at joint positions ``q`` and velocities ``dq``.
@@ -101,16 +112,24 @@ class MotorCommand:
         """:meth:`torque_at`, clipped at ``effort_limit`` [N m] as a motor driver saturates."""
         return np.clip(self.torque_at(q, dq), -effort_limit, effort_limit)
 
-    def reordered(self, index: np.ndarray) -> MotorCommand:
-        """The same command with its arrays taken at ``index`` (``new[i] = old[index[i]]``)."""
+    def reordered(self, index: np.ndarray, *, orders: Orders | None = None) -> MotorCommand:
+        """The same command with its arrays taken at ``index`` (``new[i] = old[index[i]]``).
+
+        Args:
+            index: Where each joint of the result is in this command.
+            orders: The result's orders, from a caller that built ``index`` for them (a
+                :class:`~wbc.model.joint_map.JointMap` of a robot's names); by default this
+                command's joint names taken at ``index``.
+        """
         return MotorCommand(q_des=self.q_des[index], dq_des=self.dq_des[index],
-                            kp=self.kp[index], kd=self.kd[index], tau_ff=self.tau_ff[index])
+                            kp=self.kp[index], kd=self.kd[index], tau_ff=self.tau_ff[index],
+                            orders=self.orders.reordered(index) if orders is None else orders)
 
     def copy(self) -> MotorCommand:
-        """A command with its own arrays (a plain :class:`MotorCommand`)."""
+        """A command with its own arrays (a plain :class:`MotorCommand`), same orders."""
         return MotorCommand(q_des=np.array(self.q_des), dq_des=np.array(self.dq_des),
                             kp=np.array(self.kp), kd=np.array(self.kd),
-                            tau_ff=np.array(self.tau_ff))
+                            tau_ff=np.array(self.tau_ff), orders=self.orders)
 
     def problems(self, effort_limit: np.ndarray, names: tuple[str, ...] | None = None) -> str:
         """Why a driver should refuse this command ('' when it is fine).

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -18,6 +18,7 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_vector, as_whole_number, check_name
 from wbc.model.description import LEGS, UNITREE_SDK_LEGS
 from wbc.model.joint_map import JointMap
+from wbc.model.orders import DESCRIPTION_ORDERS, UNITREE_SDK_ORDERS, Orders
 from wbc.robot_io.sensor_record import SensorRecord
 from wbc.robot_io.unitree_sdk import SDK_LEG_MOTORS, SDK_MOTOR_SLOTS
 
@@ -47,6 +48,8 @@ class SdkLowState:
             (near) zero norm.
     """
 
+    #: Always the Unitree SDK's (motors and feet FR, FL, RR, RL).
+    orders: ClassVar[Orders] = UNITREE_SDK_ORDERS
     #: Base orientation, (w, x, y, z), scalar first.
     imu_quaternion_wxyz: np.ndarray
     #: Base angular velocity in the base frame [rad/s] (3,).
@@ -127,7 +130,9 @@ class SdkLowState:
     def sensor_record(self, stamp_s: float | None = None) -> SensorRecord:
         """The same sample as a :class:`wbc.SensorRecord` in the description's orders
         (joints FL, FR, RL, RR x hip, thigh, calf; feet FL, FR, RL, RR), mapped by name:
-        what :class:`wbc.StateEstimator` takes.
+        what :class:`wbc.StateEstimator` takes. Its ``orders`` say so: a robot returning
+        it from ``read_sensors()`` declares the description's orders (``JOINT_NAMES``,
+        ``LEGS``), not the SDK's.
 
         Args:
             stamp_s: When it was taken [s]; by default ``tick`` read as milliseconds (the
@@ -231,12 +236,18 @@ def _record(quaternion: Any, gyroscope: Any, accelerometer: Any, q: Any, dq: Any
         imu_quaternion_wxyz=quaternion, gyroscope_rad_s=gyroscope,
         accelerometer_m_s2=accelerometer, q=np.asarray(q, dtype=float)[joints],
         dq=np.asarray(dq, dtype=float)[joints], tau_est=np.asarray(tau, dtype=float)[joints],
-        foot_force=np.asarray(feet, dtype=float)[_SDK_LEG_SLOTS])
+        foot_force=np.asarray(feet, dtype=float)[_SDK_LEG_SLOTS], orders=DESCRIPTION_ORDERS)
 
 
 def sensor_record_from_message(low_state: Any, *, stamp_s: float | None = None) -> SensorRecord:
     """A ``LowState_`` (or anything with its attributes) as a :class:`wbc.SensorRecord` in
     the description's orders, for the state estimator.
+
+    The message is in the SDK's orders (FR, FL, RR, RL); the record is not: it is mapped by
+    name and tagged :data:`~wbc.model.orders.DESCRIPTION_ORDERS`. A
+    :class:`~actions.robot.robot_interface.RobotInterface` that returns it from
+    ``read_sensors()`` declares the description's orders (``joint_names = JOINT_NAMES``,
+    ``leg_names = LEGS``); one that declares the SDK's is refused by the loop, naming both.
 
     Unlike :meth:`SdkLowState.from_message`, non-finite readings pass through: a failing
     sensor is the estimator's to detect, report and work around, not a reason to stop the

@@ -6,7 +6,7 @@ The fields, units, sentinels and the SDK's joint order are in :mod:`wbc.robot_io
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -14,6 +14,7 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_vector
 from wbc.model.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
 from wbc.model.joint_map import JointMap
+from wbc.model.orders import DESCRIPTION_ORDERS, UNITREE_SDK_ORDERS, Orders
 from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.unitree_sdk import (
     MODE_ENABLE,
@@ -29,6 +30,11 @@ _SDK = JointMap.unitree_sdk()
 # Messages carry float32: recognise a sentinel that went through one.
 _SENTINEL_RTOL = 1e-6
 _COMMAND_FIELDS = ("mode", "q", "dq", "tau", "kp", "kd")
+
+
+#: How to reach the description's order, ending an order mismatch's message.
+FROM_DESCRIPTION_ONLY = ("pass the controller's command as it is (the description's "
+                         "order): this conversion maps it to the SDK's by name")
 
 
 def _joints(indices: np.ndarray, names: tuple[str, ...]) -> str:
@@ -87,6 +93,8 @@ class SdkMotorCommand:
             than 0x00 or 0x01, or a stop sentinel on a motor whose gain would act on it.
     """
 
+    #: Always the Unitree SDK's (motor slots 0 to 11).
+    orders: ClassVar[Orders] = UNITREE_SDK_ORDERS
     #: 0x01 enable, 0x00 stop (uint8).
     mode: np.ndarray
     #: Position targets [rad], or :data:`POS_STOP_F` where ``kp = 0``.
@@ -128,15 +136,22 @@ class SdkMotorCommand:
         Every motor is enabled (``mode = 0x01``); the arrays are reordered by joint name.
 
         Args:
-            cmd: The command, description order (FL, FR, RL, RR).
+            cmd: The command, description order (FL, FR, RL, RR): its ``orders`` are
+                checked (an object without ``orders`` is taken as in the description's).
             use_stop_sentinels: Write :data:`POS_STOP_F` as ``q`` where ``kp = 0`` and
                 :data:`VEL_STOP_F` as ``dq`` where ``kd = 0``, as the SDK's examples do
                 (the targets are unused there). Off: the targets are sent as they are.
 
         Raises:
+            OrderMismatchError: ``cmd`` is in another joint order (a robot's, after
+                :meth:`MotorCommand.reordered`), named with the description's.
             ConfigurationError: A field of ``cmd`` (named ``cmd.<field>``) with a wrong
                 shape, a non-finite value or a negative gain.
         """
+        orders = getattr(cmd, "orders", DESCRIPTION_ORDERS)  # a duck-typed command: as before
+        if orders is not DESCRIPTION_ORDERS:
+            orders.check(DESCRIPTION_ORDERS, what="SdkMotorCommand.from_control_output(cmd)",
+                         legs=False, fix=FROM_DESCRIPTION_ONLY)
         q_des = as_vector("cmd.q_des", cmd.q_des, SDK_LEG_MOTORS)
         dq_des = as_vector("cmd.dq_des", cmd.dq_des, SDK_LEG_MOTORS)
         tau_ff = as_vector("cmd.tau_ff", cmd.tau_ff, SDK_LEG_MOTORS)
@@ -164,7 +179,7 @@ class SdkMotorCommand:
         dq = np.where(enabled & ~_is_stop(self.dq, VEL_STOP_F), self.dq, 0.0)
         sdk = MotorCommand(q_des=q, dq_des=dq, kp=np.where(enabled, self.kp, 0.0),
                            kd=np.where(enabled, self.kd, 0.0),
-                           tau_ff=np.where(enabled, self.tau, 0.0))
+                           tau_ff=np.where(enabled, self.tau, 0.0), orders=UNITREE_SDK_ORDERS)
         return sdk.reordered(_SDK.inverse)
 
     def torque_at(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:

@@ -16,10 +16,17 @@ Fields and units:
 - ``gyroscope_rad_s`` (3,) [rad/s]: angular velocity, IMU (= base) frame.
 - ``accelerometer_m_s2`` (3,) [m/s^2]: specific force at the IMU, IMU frame (+9.81 on z
   when standing level and still).
-- ``q`` [rad], ``dq`` [rad/s], ``tau_est`` [N m] (12,): per joint, in the order of the
-  joint names that come with the record (the robot's own; the description's once mapped).
-- ``foot_force`` (4,): raw foot-force counts (no unit), in the order of the leg names that
-  come with the record.
+- ``q`` [rad], ``dq`` [rad/s], ``tau_est`` [N m] (12,): per joint, in ``orders.joint_names``.
+- ``foot_force`` (4,): raw foot-force counts (no unit), in ``orders.leg_names``.
+- ``orders``: the record's joint and leg orders (:class:`wbc.model.orders.Orders`). A robot
+  fills its records in its own orders (``SensorRecord.zeros(orders=...)``);
+  :class:`actions.MappedRobot` checks them against the robot's declared ``joint_names`` and
+  ``leg_names`` and hands the estimator a record in the description's orders, which the
+  estimator checks in turn. A record built without orders is in the description's
+  (:data:`~wbc.model.orders.DESCRIPTION_ORDERS`): that is what every consumer of records in
+  the library takes, and what records built by hand for the estimator always were; a record
+  in another order must say so where its arrays are filled, so that it is refused, never
+  reordered twice or not at all, wherever it is passed by mistake.
 
 Values may be non-finite: a sensor that fails sends what it sends, and the estimator
 reports what it distrusts instead of stopping the loop. Shapes are checked on construction.
@@ -34,6 +41,7 @@ import numpy as np
 
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_whole_number
+from wbc.model.orders import DESCRIPTION_ORDERS, Orders
 
 #: Field name -> shape of the record's arrays.
 ARRAY_FIELDS: dict[str, int] = {
@@ -75,8 +83,13 @@ class SensorRecord:
     dq: np.ndarray
     tau_est: np.ndarray
     foot_force: np.ndarray
+    orders: Orders = DESCRIPTION_ORDERS
 
     def __post_init__(self) -> None:
+        if not isinstance(self.orders, Orders):
+            raise ConfigurationError(
+                f"orders: expected an Orders (e.g. Orders.of(joint_names, leg_names), "
+                f"DESCRIPTION_ORDERS, UNITREE_SDK_ORDERS), received {self.orders!r}")
         if isinstance(self.stamp_s, bool) or not isinstance(self.stamp_s, (int, float,
                                                                          np.number)):
             raise ConfigurationError(f"stamp_s: expected a time [s], received {self.stamp_s!r}")
@@ -86,10 +99,11 @@ class SensorRecord:
             setattr(self, name, _array(name, getattr(self, name), size))
 
     @classmethod
-    def zeros(cls) -> SensorRecord:
-        """A record of zeros (a level, unit quaternion): a buffer to fill in place."""
+    def zeros(cls, orders: Orders = DESCRIPTION_ORDERS) -> SensorRecord:
+        """A record of zeros (a level, unit quaternion) in ``orders``: a buffer to fill in
+        place (a robot in the Unitree SDK's orders: ``SensorRecord.zeros(UNITREE_SDK_ORDERS)``)."""
         record = cls(0.0, 0, np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.zeros(3),
-                     np.zeros(12), np.zeros(12), np.zeros(12), np.zeros(4))
+                     np.zeros(12), np.zeros(12), np.zeros(12), np.zeros(4), orders)
         return record
 
     def copy(self) -> SensorRecord:
@@ -99,7 +113,8 @@ class SensorRecord:
         return record
 
     def copy_from(self, other: SensorRecord) -> None:
-        """Overwrite this record with ``other``'s values (in place, same orders)."""
+        """Overwrite this record with ``other``'s values and orders (in place)."""
+        self.orders = other.orders
         self.stamp_s = other.stamp_s
         self.tick = other.tick
         self.imu_quaternion_wxyz[:] = other.imu_quaternion_wxyz
@@ -115,3 +130,24 @@ class SensorRecord:
         values: dict[str, Any] = {"stamp_s": self.stamp_s, "tick": self.tick}
         values.update({name: getattr(self, name).tolist() for name in ARRAY_FIELDS})
         return values
+
+
+def check_description_orders(record: object, reader: object, method: str) -> None:
+    """Raise unless ``record``, a :class:`SensorRecord`, is in the description's orders
+    (what the estimator and the controller read); anything else passes, for the caller's
+    own checks to name. One identity comparison when it is.
+
+    Args:
+        record: What ``reader.method`` received.
+        reader: The object reading it (its class is named in the message).
+        method: The method reading it.
+
+    Raises:
+        OrderMismatchError: ``"<Reader>.<method>(record): in <its orders>, expected the
+            description's ..."``.
+    """
+    orders = getattr(record, "orders", DESCRIPTION_ORDERS)
+    if orders is not DESCRIPTION_ORDERS and isinstance(orders, Orders):
+        orders.check(DESCRIPTION_ORDERS, what=f"{type(reader).__name__}.{method}(record)",
+                     fix="map it by name first (a ControlLoop does, through MappedRobot, "
+                         "for a robot that declares its joint_names and leg_names)")

@@ -18,6 +18,7 @@ import numba
 import numpy as np
 
 from wbc.core.errors import ConfigurationError
+from wbc.model.orders import UNITREE_SDK_ORDERS
 from wbc.robot_io.dds.c_layout import (
     _WORDS,
     HEAD,
@@ -193,7 +194,8 @@ def motor_command_from_low_cmd(record: np.ndarray, *, slots: np.ndarray,
 
     Args:
         record: A ``LowCmd_`` record (e.g. a received sample's; read-only is fine).
-        slots: For each joint of the result, its SDK motor slot (0 to 11), ``intp``.
+        slots: For each joint of the result, its SDK motor slot (0 to 11), ``intp``; the
+            result's ``orders`` are the SDK's joints taken at ``slots``.
         effort_limit: Each joint's effort limit [N m] (float64, the result's order).
 
     Raises:
@@ -207,7 +209,8 @@ def motor_command_from_low_cmd(record: np.ndarray, *, slots: np.ndarray,
                            np.frombuffer(record, dtype=np.uint32), slots, effort_limit, *out):
         return None
     q_des, dq_des, kp, kd, tau_ff = out
-    return MotorCommand(q_des=q_des, dq_des=dq_des, kp=kp, kd=kd, tau_ff=tau_ff)
+    return MotorCommand(q_des=q_des, dq_des=dq_des, kp=kp, kd=kd, tau_ff=tau_ff,
+                        orders=UNITREE_SDK_ORDERS.reordered(slots))
 
 
 def _hex_bytes(values: np.ndarray) -> str:

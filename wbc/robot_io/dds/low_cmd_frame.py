@@ -26,6 +26,7 @@ import numba
 import numpy as np
 
 from wbc.model.joint_map import JointMap
+from wbc.model.orders import DESCRIPTION_ORDERS
 from wbc.robot_io.dds.c_layout import (
     LOW_CMD_DTYPE,
     MOTOR_CMD_DTYPE,
@@ -33,6 +34,7 @@ from wbc.robot_io.dds.c_layout import (
     sdk_default_low_cmd,
 )
 from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.sdk_motor_command import FROM_DESCRIPTION_ONLY
 from wbc.robot_io.unitree_sdk import POS_STOP_F, SDK_LEG_MOTORS, VEL_STOP_F
 
 # Messages carry float32: a sentinel within this relative distance is one (as
@@ -139,7 +141,15 @@ class LowCmdFrame:
             gain) or an array is not float64: the record is then unchanged, and
             ``SdkMotorCommand.from_control_output(command)`` says what is wrong (or, for
             another dtype, converts it).
+
+        Raises:
+            OrderMismatchError: ``command`` is in another joint order (``command.orders``),
+                named with the description's; nothing is written.
         """
+        orders = command.orders
+        if orders is not DESCRIPTION_ORDERS:
+            orders.check(DESCRIPTION_ORDERS, what="LowCmdFrame.fill(command)", legs=False,
+                         fix=FROM_DESCRIPTION_ONLY)
         try:
             return _fill(command.q_des, command.dq_des, command.kp, command.kd,
                          command.tau_ff, self._index, self.use_stop_sentinels,

@@ -17,6 +17,7 @@ import numpy as np
 
 from wbc.model.description import LEGS, UNITREE_SDK_LEGS
 from wbc.model.joint_map import JointMap
+from wbc.model.orders import DESCRIPTION_ORDERS
 from wbc.robot_io.dds.c_layout import HEAD, LOW_STATE_DTYPE, check_record, set_crc, zero_record
 from wbc.robot_io.sensor_record import SensorRecord
 from wbc.robot_io.unitree_sdk import SDK_LEG_MOTORS
@@ -39,7 +40,8 @@ def sensor_record_from_low_state(record: np.ndarray, *, stamp_s: float | None = 
         record: A 0-d array of ``LOW_STATE_DTYPE``.
         stamp_s: When it was taken [s]; by default ``tick`` read as milliseconds.
         out: A record to overwrite in place (the control loop's, reused every tick); a new
-            one when not given.
+            one when not given. Either way the record is tagged
+            :data:`~wbc.model.orders.DESCRIPTION_ORDERS`.
 
     Raises:
         ConfigurationError: ``record`` is not a ``LowState_`` record.
@@ -55,7 +57,8 @@ def sensor_record_from_low_state(record: np.ndarray, *, stamp_s: float | None = 
             stamp_s=stamp, tick=tick, imu_quaternion_wxyz=imu["quaternion"],
             gyroscope_rad_s=imu["gyroscope"], accelerometer_m_s2=imu["accelerometer"],
             q=motors["q"][joints], dq=motors["dq"][joints], tau_est=motors["tau_est"][joints],
-            foot_force=record["foot_force"][_SDK_LEG_SLOTS])
+            foot_force=record["foot_force"][_SDK_LEG_SLOTS], orders=DESCRIPTION_ORDERS)
+    out.orders = DESCRIPTION_ORDERS  # whatever the buffer held before: these orders now
     out.stamp_s = float(stamp)
     out.tick = tick
     out.imu_quaternion_wxyz[:] = imu["quaternion"]
@@ -93,12 +96,18 @@ def low_state_from_sensor_record(sensor: SensorRecord, *,
     new record).
 
     Args:
-        sensor: The values, in the description's orders.
+        sensor: The values, in the description's orders (checked: ``sensor.orders``).
         out: A record to fill in place; a new one when not given.
 
     Raises:
+        OrderMismatchError: ``sensor`` is in other orders (a plant's own), named with the
+            description's.
         ConfigurationError: ``out`` is not a ``LowState_`` record.
     """
+    if sensor.orders is not DESCRIPTION_ORDERS:
+        sensor.orders.check(DESCRIPTION_ORDERS, what="low_state_from_sensor_record(sensor)",
+                            fix="map the plant's record to the description's orders by name "
+                                "first (this conversion maps that to the SDK's)")
     if out is None:
         out = zero_record(LOW_STATE_DTYPE)
     else:
