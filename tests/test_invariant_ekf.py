@@ -254,9 +254,9 @@ def test_bad_configuration_names_the_field():
         InvariantEkfConfig(contact_noise="0.1")  # type: ignore[arg-type]
     with pytest.raises(NonFiniteError, match=r"^kinematics_noise_rad: expected a finite"):
         InvariantEkfConfig(kinematics_noise_rad=math.nan)
-    with pytest.raises(ConfigurationError, match=r"^foot_force_off: expected less than "
-                                                 r"foot_force_on \(60\), received 70"):
-        InvariantEkfConfig(foot_force_off=70.0)
+    with pytest.raises(ConfigurationError, match=r"^foot_force_off_n: expected less than "
+                                                 r"foot_force_on_n \(20 N\), received 30"):
+        InvariantEkfConfig(foot_force_off_n=30.0)
     with pytest.raises(ConfigurationError, match=r"^use_foot_force: expected true or false"):
         InvariantEkfConfig(use_foot_force=1)  # type: ignore[arg-type]
     with pytest.raises(UnknownNameError, match=r"^unknown estimator parameter 'nope'; valid "

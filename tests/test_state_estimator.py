@@ -260,9 +260,9 @@ def test_bad_input_gets_one_clear_error():
     with pytest.raises(ConfigurationError, match=r"^unknown estimator parameter\(s\) "
                                                  r"\['tau'\]; valid parameters: quaternion_"):
         StateEstimator(tau=1.0)
-    with pytest.raises(ConfigurationError, match=r"^foot_force_off: expected less than "
-                                                 r"foot_force_on \(60\), received 70"):
-        EstimatorConfig(foot_force_off=70.0)
+    with pytest.raises(ConfigurationError, match=r"^foot_force_off_n: expected less than "
+                                                 r"foot_force_on_n \(20 N\), received 30"):
+        EstimatorConfig(foot_force_off_n=30.0)
     with pytest.raises(ConfigurationError, match=r"^trust_timeout_s: expected a value in "
                                                  r"\[0, 10\], received -1"):
         StateEstimator(trust_timeout_s=-1.0)

@@ -14,6 +14,7 @@ import numpy as np
 
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, known_fields_only
+from wbc.estimation.foot_force_calibration import FootForceCalibration
 from wbc.model.description import FOOT_RADIUS_M
 
 
@@ -31,11 +32,24 @@ class SensorTrustConfig:
         min_contact_weight: Below this weight a foot follows the kinematics freely.
         full_trust_force_n: A stance foot whose normal-force bound [N] is at least this
             has the schedule's full weight (the bound ramps down as a foot is unloaded).
-        use_foot_force: Fuse the foot-force counts with the schedule (off: schedule only,
+        use_foot_force: Fuse the foot-force sensors with the schedule (off: schedule only,
             for robots or simulators without foot sensors).
-        foot_force_on: Count above which a foot turns to contact.
-        foot_force_off: Count below which it turns to no contact.
+        foot_force_offset: Each foot sensor's count with no load: one number for every
+            foot or four (FL, FR, RL, RR); see
+            :class:`wbc.estimation.foot_force_calibration.FootForceCalibration`. The
+            default is the simulated GO2's (``sim.sensor_model``); a robot's is learnt
+            on it (:mod:`actions.robot.foot_calibration`) or given.
+        foot_force_gain: Each foot sensor's counts per newton of normal force (above 0).
+        foot_force_on_n: Normal force [N] above which a foot turns to contact.
+        foot_force_off_n: Normal force [N] below which it turns to no contact.
         foot_force_full_scale: The sensor's highest count: a reading there is saturated.
+        weight_low_fraction: The feet's calibrated forces summing to less than this
+            fraction of the robot's weight while at least three feet stand (or more than
+            ``weight_high_fraction`` of it) contradict the weight: a wrong calibration or
+            broken sensors, and the schedule alone decides every foot.
+        weight_high_fraction: See ``weight_low_fraction``.
+        weight_check_s: How long [s] the evidence must contradict the weight before the
+            fault is raised (a landing's or a push's peak does not).
         foot_sensor_stuck_s: A stance foot's sensor whose count does not change for this
             long [s] is stuck (a loaded foot's live sensor always changes: its load and its
             noise do).
@@ -59,9 +73,15 @@ class SensorTrustConfig:
     min_contact_weight: float = 0.02
     full_trust_force_n: float = 30.0
     use_foot_force: bool = True
-    foot_force_on: float = 60.0
-    foot_force_off: float = 40.0
+    foot_force_offset: tuple[float, float, float, float] | float = 10.0
+    foot_force_gain: tuple[float, float, float, float] | float = 2.5
+    # 20 / 12 N are the 60 / 40 counts the thresholds were at 10 + 2.5 counts/N.
+    foot_force_on_n: float = 20.0
+    foot_force_off_n: float = 12.0
     foot_force_full_scale: float = 1000.0
+    weight_low_fraction: float = 0.5
+    weight_high_fraction: float = 2.0
+    weight_check_s: float = 0.1
     foot_sensor_stuck_s: float = 0.05
     foot_sensor_recover_s: float = 0.5
     trust_timeout_s: float = 0.01
@@ -73,14 +93,23 @@ class SensorTrustConfig:
         if not isinstance(self.use_foot_force, bool):
             raise ConfigurationError(
                 f"use_foot_force: expected true or false, received {self.use_foot_force!r}")
-        if self.foot_force_off >= self.foot_force_on:
+        calibration = self.foot_calibration()  # checks offset and gain (field, leg named)
+        object.__setattr__(self, "foot_force_offset", calibration.offset)
+        object.__setattr__(self, "foot_force_gain", calibration.gain)
+        if self.foot_force_off_n >= self.foot_force_on_n:
             raise ConfigurationError(
-                f"foot_force_off: expected less than foot_force_on ({self.foot_force_on:g}), "
-                f"received {self.foot_force_off:g}")
-        if self.foot_force_full_scale <= self.foot_force_on:
+                f"foot_force_off_n: expected less than foot_force_on_n "
+                f"({self.foot_force_on_n:g} N), received {self.foot_force_off_n:g}")
+        on_counts = calibration.counts(np.full(4, self.foot_force_on_n))
+        if np.any(self.foot_force_full_scale <= on_counts):
             raise ConfigurationError(
-                f"foot_force_full_scale: expected more than foot_force_on "
-                f"({self.foot_force_on:g}), received {self.foot_force_full_scale:g}")
+                f"foot_force_full_scale: expected more than the count at foot_force_on_n "
+                f"({np.max(on_counts):g}), received {self.foot_force_full_scale:g}")
+
+    def foot_calibration(self, source: str = "default") -> FootForceCalibration:
+        """The foot sensors' model this config gives (``source`` says where it is from)."""
+        return FootForceCalibration(offset=self.foot_force_offset, gain=self.foot_force_gain,
+                                    source=source)
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
@@ -93,17 +122,22 @@ class SensorTrustConfig:
                         dtype=float)
 
 
-#: The contact fusion's fields, the last of every estimator's kernel vector, in this order.
-CONTACT_PARAMS = ("full_trust_force_n", "use_foot_force", "foot_force_on", "foot_force_off",
-                  "foot_force_full_scale", "foot_sensor_stuck_s", "foot_sensor_recover_s")
+#: The contact fusion's fields, the last of every estimator's kernel vector, in this order
+#: (the calibration per foot is an array of its own: see ``shared_kernels.CAL_SIZE``).
+CONTACT_PARAMS = ("full_trust_force_n", "use_foot_force", "foot_force_on_n",
+                  "foot_force_off_n", "foot_force_full_scale", "foot_sensor_stuck_s",
+                  "foot_sensor_recover_s", "weight_low_fraction", "weight_high_fraction",
+                  "weight_check_s")
 
 #: Valid range of each shared numeric field (a 0 lower bound is inclusive, others exclusive).
 _SHARED_RANGES: dict[str, tuple[float, float]] = {
     "quaternion_tolerance": (1e-6, 0.5), "quaternion_timeout_s": (1e-3, 60.0),
     "foot_position_noise_m": (1e-9, 1.0), "swing_noise_scale": (1.0, 1e6),
     "min_contact_weight": (0.0, 1.0), "full_trust_force_n": (1e-3, 1e4),
-    "foot_force_on": (-32768.0, 32767.0), "foot_force_off": (-32768.0, 32767.0),
-    "foot_force_full_scale": (-32768.0, 32767.0), "foot_sensor_stuck_s": (1e-3, 10.0),
+    "foot_force_on_n": (0.0, 1e4), "foot_force_off_n": (0.0, 1e4),
+    "foot_force_full_scale": (-32768.0, 32767.0), "weight_low_fraction": (0.0, 1.0),
+    "weight_high_fraction": (1.0, 100.0), "weight_check_s": (1e-3, 10.0),
+    "foot_sensor_stuck_s": (1e-3, 10.0),
     "foot_sensor_recover_s": (0.0, 60.0), "trust_timeout_s": (0.0, 10.0),
     "foot_radius_m": (0.0, 0.1),
 }

@@ -52,8 +52,8 @@ _WORK_SIZE = 497
 def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, force_in,
               schedule, dt_nominal, params, imu_offset, rotations, translations, axes,
               foot_offsets, foot_position, foot_jacobian, foot_angular_jacobian, clock, x, P,
-              foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, joint_q,
-              joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
+              foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
+              joint_q, joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
     """One tick of the invariant EKF (see the module docstring); returns the fault flags.
 
     ``x`` (:data:`_X_SIZE`) is the mean, ``P`` (27, 27) the right-invariant error's
@@ -99,7 +99,7 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                                rotations, translations, axes, foot_offsets, foot_position,
                                foot_jacobian, foot_angular_jacobian, legs_work, joint_q,
                                joint_dq, foot_contact, foot_same_s, foot_good_s, foot_reason,
-                               foot_last, weight)
+                               foot_last, foot_cal, weight)
     # --- prediction: the covariance on the unpropagated mean, then the mean
     _transition_blocks(rotation, x, dt, blocks)
     _propagate_covariance(P, blocks)

@@ -21,6 +21,7 @@ from wbc.estimation.state_estimate import (
     FOOT_SATURATED,
     FOOT_SENSOR,
     FOOT_STUCK,
+    FOOT_WEIGHT,
     GYRO_BAD,
     JOINTS_BAD,
     NO_DATA,
@@ -33,6 +34,13 @@ from wbc.model.leg_kinematics import leg_kinematics
 
 #: Scratch space of :func:`start_pose` [floats].
 START_WORK_SIZE = 49
+#: The foot sensors' calibration and weight check, one array (``foot_cal``): each foot's
+#: offset [counts] and gain [counts/N] (``LEGS`` order), the robot's weight [N], the time the
+#: evidence has contradicted it [s], the time it has agreed since [s], the fault (1: raised)
+#: and the last sum of the calibrated forces [N].
+CAL_OFFSET, CAL_GAIN, CAL_WEIGHT = 0, 4, 8
+CAL_BAD_S, CAL_GOOD_S, CAL_ACTIVE, CAL_SUM = 9, 10, 11, 12
+CAL_SIZE = 13
 
 @numba.njit(cache=True)
 def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock,
@@ -109,24 +117,38 @@ def account_trust(flags, dt, clock):  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on, force_off,
-                    force_full, stuck_s, recover_s, foot_contact, foot_same_s, foot_good_s,
-                    foot_reason, foot_last, weight):  # pragma: no cover - compiled
+                    force_full, stuck_s, recover_s, weight_low, weight_high, weight_check_s,
+                    foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
+                    weight):  # pragma: no cover - compiled
     """Each foot's contact weight: the schedule, fused with its foot-force sensor.
 
     The schedule's weight is the foot's normal-force bound over ``full_force`` (clipped to
     [0, 1]); the sensor's verdict is a hysteresis between ``force_off`` and ``force_on``
-    counts. A sensor at full scale, non-finite, or (on a scheduled stance foot) repeating
-    one reading for ``stuck_s`` [s] is distrusted until it has read changing, in-range
-    values for ``recover_s`` [s]; the schedule alone then decides for that foot.
+    [N], its count turned into newtons by the calibration in ``foot_cal``. A sensor at full
+    scale (counts), non-finite, or (on a scheduled stance foot) repeating one reading for
+    ``stuck_s`` [s] is distrusted until it has read changing, in-range values for
+    ``recover_s`` [s]; the schedule alone then decides for that foot.
+
+    The weight check: while at least three feet are scheduled to stand and every sensor is
+    trusted, the calibrated forces must sum to between ``weight_low`` and ``weight_high``
+    times the robot's weight; evidence outside for ``weight_check_s`` [s] raises
+    :data:`FOOT_WEIGHT`, and the schedule alone decides every foot until the sum has been
+    back inside for ``recover_s``.
 
     Returns:
         :data:`FOOT_SENSOR` if a foot sensor is distrusted, else 0, with each foot's reason
-        in two bits from :data:`FOOT_REASON_SHIFT`. ``foot_*`` are the sensors' state
-        (in/out), ``weight`` (4,) the output.
+        in two bits from :data:`FOOT_REASON_SHIFT`, and :data:`FOOT_WEIGHT`. ``foot_*`` are
+        the sensors' state (in/out; ``foot_cal`` is laid out as :data:`CAL_SIZE` says),
+        ``weight`` (4,) the output.
     """
     flags = 0
+    total = 0.0
+    standing = 0
+    all_ok = True
     for i in range(4):
         scheduled = min(1.0, max(0.0, schedule[i] / full_force))
+        if scheduled >= 1.0:
+            standing += 1
         if new:
             value = force_in[i]
             if not math.isfinite(value):
@@ -150,13 +172,35 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
                     foot_good_s[i] += dt
                     if foot_good_s[i] >= recover_s:
                         foot_reason[i] = FOOT_OK
-                if value > force_on:
+                newtons = (value - foot_cal[CAL_OFFSET + i]) / foot_cal[CAL_GAIN + i]
+                total += newtons
+                if newtons > force_on:
                     foot_contact[i] = 1.0
-                elif value < force_off:
+                elif newtons < force_off:
                     foot_contact[i] = 0.0
         if foot_reason[i] != FOOT_OK:
             flags |= FOOT_SENSOR | (foot_reason[i] << (FOOT_REASON_SHIFT + 2 * i))
-        if use_force and foot_reason[i] == FOOT_OK:
+            all_ok = False
+    if new and use_force and all_ok and standing >= 3:
+        foot_cal[CAL_SUM] = total
+        robot = foot_cal[CAL_WEIGHT]
+        if total < weight_low * robot or total > weight_high * robot:
+            foot_cal[CAL_BAD_S] += dt
+            foot_cal[CAL_GOOD_S] = 0.0
+            if foot_cal[CAL_BAD_S] >= weight_check_s:
+                foot_cal[CAL_ACTIVE] = 1.0
+        else:
+            foot_cal[CAL_BAD_S] = 0.0
+            if foot_cal[CAL_ACTIVE] > 0.0:
+                foot_cal[CAL_GOOD_S] += dt
+                if foot_cal[CAL_GOOD_S] >= recover_s:
+                    foot_cal[CAL_ACTIVE] = 0.0
+    contradicted = use_force and foot_cal[CAL_ACTIVE] > 0.0
+    if contradicted:
+        flags |= FOOT_WEIGHT
+    for i in range(4):
+        scheduled = min(1.0, max(0.0, schedule[i] / full_force))
+        if use_force and not contradicted and foot_reason[i] == FOOT_OK:
             weight[i] = scheduled * foot_contact[i]
         else:
             weight[i] = scheduled
@@ -167,7 +211,7 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
 def legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params, rotations,
                       translations, axes, foot_offsets, foot_position, foot_jacobian,
                       foot_angular_jacobian, legs_work, joint_q, joint_dq, foot_contact,
-                      foot_same_s, foot_good_s, foot_reason, foot_last,
+                      foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
                       weight):  # pragma: no cover - compiled
     """The joints (kept when usable), the legs' kinematics and each foot's contact weight
     (:func:`contact_weights`); the contact flags.
@@ -182,10 +226,11 @@ def legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, param
         leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
                        foot_jacobian, foot_angular_jacobian, legs_work)
     end = params.shape[0]
-    return contact_weights(new, dt, force_in, schedule, params[end - 7], params[end - 6] > 0.5,
-                           params[end - 5], params[end - 4], params[end - 3], params[end - 2],
-                           params[end - 1], foot_contact, foot_same_s, foot_good_s,
-                           foot_reason, foot_last, weight)
+    return contact_weights(new, dt, force_in, schedule, params[end - 10], params[end - 9] > 0.5,
+                           params[end - 8], params[end - 7], params[end - 6], params[end - 5],
+                           params[end - 4], params[end - 3], params[end - 2], params[end - 1],
+                           foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last,
+                           foot_cal, weight)
 
 
 @numba.njit(cache=True)

@@ -18,6 +18,8 @@ from wbc.robot_io.sensor_record import SensorRecord
 STALE, NO_DATA, QUATERNION_NON_FINITE, QUATERNION_NOT_UNIT = 1, 2, 4, 8
 GYRO_BAD, ACCEL_BAD, JOINTS_BAD, FOOT_SENSOR = 16, 32, 64, 128
 QUATERNION_TIMEOUT = 256
+#: The feet's calibrated forces contradict the robot's weight: contact from the schedule.
+FOOT_WEIGHT = 512
 #: Flags that make a sample untrustworthy (the others are worked around).
 UNTRUSTED = STALE | NO_DATA | GYRO_BAD | JOINTS_BAD | QUATERNION_TIMEOUT
 # Why a foot sensor is distrusted.
@@ -58,7 +60,8 @@ class StateEstimate:
 
 def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
                     quaternion_tolerance: float, quaternion_timeout_s: float,
-                    quaternion_note: str = "orientation from the gyroscope") -> str:
+                    quaternion_note: str = "orientation from the gyroscope",
+                    weight_evidence: tuple[float, float] = (math.nan, math.nan)) -> str:
     """A tick's fault flags in words ('' when none), with the readings that raised them.
 
     Args:
@@ -68,6 +71,8 @@ def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
         quaternion_tolerance: The estimator's unit-norm tolerance.
         quaternion_timeout_s: Its time [s] on the gyroscope alone.
         quaternion_note: What the estimator does without the IMU's quaternion.
+        weight_evidence: The feet's calibrated forces' last sum and the robot's weight [N]
+            (the :data:`FOOT_WEIGHT` fault quotes them).
     """
     parts = []
     if flags & NO_DATA:
@@ -98,4 +103,9 @@ def describe_faults(flags: int, record: SensorRecord, foot_reason: np.ndarray,
             value = record.foot_force[i]
             parts.append(f"{leg} foot-force sensor {_FOOT_REASONS[reason].format(value=value)}: "
                          "contact from the schedule")
+    if flags & FOOT_WEIGHT:
+        total, weight = weight_evidence
+        parts.append(f"foot-force evidence contradicts the weight (the feet read {total:.0f} N "
+                     f"in all, the robot weighs {weight:.0f} N): foot-force calibration wrong "
+                     "or sensors broken; contact from the schedule")
     return "; ".join(parts)

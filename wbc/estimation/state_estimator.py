@@ -22,19 +22,22 @@ controller's contact schedule, into the controller's ``(q, v)``:
   2 us a tick, compiled, with no allocation.
 - **Contact**: each foot's weight in the correction is the schedule's (1 for a loaded stance
   foot, ramping to 0 as the controller unloads it, 0 in swing) times the foot-force sensor's
-  verdict (a count above ``foot_force_on`` turns contact on, below ``foot_force_off`` off).
+  verdict: its count in newtons through the calibration (``counts = offset + gain x N``,
+  :attr:`EstimatorBase.foot_calibration`) above ``foot_force_on_n`` turns contact on, below
+  ``foot_force_off_n`` off. Calibrated forces that contradict the robot's weight while it
+  stands are a fault, and the schedule alone decides.
   A foot's measurement noise grows ``swing_noise_scale`` times as its weight goes from 1 to
   0; a foot below ``min_contact_weight`` follows the kinematics freely. Without foot sensors
   (``use_foot_force=False``, or a sensor distrusted) the schedule alone decides.
 
 Faults: a non-finite or non-unit quaternion, a non-finite gyroscope, accelerometer or
 joint reading, a repeated (stale) sample, no sample at all, a stance foot's sensor stuck on
-one value, a foot sensor at full scale. The estimate reports what it distrusts
-(:attr:`StateEstimate.faults`), goes on with the rest, and says when it has had no
-trustworthy sample for longer than ``trust_timeout_s`` (:attr:`StateEstimate.usable`): the
-control loop then sends the controller's safe command. The README's "What it measures"
-section has the measurements behind the choices (this filter against the contact-aided
-invariant EKF, :class:`wbc.InvariantEkf`, the default).
+one value, a foot sensor at full scale, foot forces that contradict the weight. The
+estimate reports what it distrusts (:attr:`StateEstimate.faults`), goes on with the rest,
+and says when it has had no trustworthy sample for longer than ``trust_timeout_s``
+(:attr:`StateEstimate.usable`): the control loop then sends the controller's safe command.
+The README's "What it measures" section has the measurements behind the choices (this
+filter against the contact-aided invariant EKF, :class:`wbc.InvariantEkf`, the default).
 """
 
 from __future__ import annotations
@@ -45,9 +48,19 @@ from typing import Any, ClassVar
 import numpy as np
 
 from wbc.core.compiled_call import bind_compiled
+from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector
 from wbc.estimation.estimator_config import EstimatorConfig, SensorTrustConfig
+from wbc.estimation.foot_force_calibration import FootForceCalibration
+from wbc.estimation.shared_kernels import (
+    CAL_ACTIVE,
+    CAL_GAIN,
+    CAL_OFFSET,
+    CAL_SIZE,
+    CAL_SUM,
+    CAL_WEIGHT,
+)
 from wbc.estimation.state_estimate import FOOT_OK, UNTRUSTED, StateEstimate, describe_faults
 from wbc.estimation.state_estimator_kernels import (
     _ALIGN,
@@ -60,7 +73,7 @@ from wbc.estimation.state_estimator_kernels import (
 )
 from wbc.model.description import Go2Description
 from wbc.model.leg_kinematics import LegKinematics
-from wbc.robot_io.sensor_record import SensorRecord, check_description_orders
+from wbc.robot_io.sensor_record import SensorRecord
 
 #: ``clock``'s entry of the time without a trusted sample (see
 #: :func:`wbc.estimation.shared_kernels.check_sample`).
@@ -116,6 +129,10 @@ class EstimatorBase:
         self._foot_good_s = np.zeros(4)
         self._foot_reason = np.zeros(4, dtype=np.int64)
         self._foot_last = np.full(4, np.nan)
+        self._foot_cal = np.zeros(CAL_SIZE)
+        robot = description or Go2Description.default()
+        self._foot_cal[CAL_WEIGHT] = robot.total_mass * GRAVITY_M_S2
+        self.set_foot_calibration(self.config.foot_calibration())
         self._joint_q = np.zeros(12)
         self._joint_dq = np.zeros(12)
         self._work = np.zeros(self.work_size)
@@ -154,7 +171,6 @@ class EstimatorBase:
             ConfigurationError: A record that cannot start the estimator (the field named);
                 nothing is changed.
         """
-        check_description_orders(record, self, "reset")
         if not isinstance(record, SensorRecord):
             raise ConfigurationError(
                 f"record: expected a SensorRecord, received {type(record).__name__}")
@@ -174,6 +190,7 @@ class EstimatorBase:
         self._foot_good_s[:] = 0.0
         self._foot_reason[:] = FOOT_OK
         self._foot_last[:] = np.nan
+        self._foot_cal[CAL_WEIGHT + 1:] = 0.0  # the weight check starts afresh
         # The record itself is the first sample.
         self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0, 0.0)
         self._described = 0
@@ -215,7 +232,6 @@ class EstimatorBase:
         if record is None:  # the kernel reads nothing of a sample that did not come
             fresh, record = False, self._input
         else:
-            check_description_orders(record, self, "update")
             fresh, self._input = True, record
         self._fresh = fresh
         if self._tick is None:
@@ -250,8 +266,8 @@ class EstimatorBase:
         arrays = (
             self._schedule, self.control_period_s, self._params, *self._leg_arrays(),
             self._clock, *self._filter_arrays(), self._foot_contact, self._foot_same_s,
-            self._foot_good_s, self._foot_reason, self._foot_last, self._joint_q,
-            self._joint_dq, estimate.q, estimate.v, estimate.contact, self._work)
+            self._foot_good_s, self._foot_reason, self._foot_last, self._foot_cal,
+            self._joint_q, self._joint_dq, estimate.q, estimate.v, estimate.contact, self._work)
         sample = self._input
         compiled = bind_compiled(
             self.kernel, True, 0.0, 0.0, sample.imu_quaternion_wxyz, sample.gyroscope_rad_s,
@@ -265,6 +281,33 @@ class EstimatorBase:
                             *arrays)
 
         return tick
+
+    # -- the foot sensors' calibration ---------------------------------------------------
+
+    @property
+    def foot_calibration(self) -> FootForceCalibration:
+        """The foot sensors' model in use (``counts = offset + gain x N`` per foot)."""
+        return self._calibration
+
+    def set_foot_calibration(self, calibration: FootForceCalibration) -> None:
+        """Use ``calibration`` from the next tick on (learnt on the robot, or given).
+
+        Raises:
+            ConfigurationError: Not a :class:`FootForceCalibration`.
+        """
+        if not isinstance(calibration, FootForceCalibration):
+            raise ConfigurationError(
+                f"calibration: expected a FootForceCalibration, received "
+                f"{type(calibration).__name__}")
+        self._calibration = calibration
+        self._foot_cal[CAL_OFFSET:CAL_OFFSET + 4] = calibration.offset
+        self._foot_cal[CAL_GAIN:CAL_GAIN + 4] = calibration.gain
+        self._foot_cal[CAL_WEIGHT + 1:] = 0.0  # judged afresh on the new calibration
+
+    @property
+    def weight_contradicted(self) -> bool:
+        """The foot forces contradict the robot's weight: contact is the schedule's alone."""
+        return bool(self._foot_cal[CAL_ACTIVE] > 0.0)
 
     # -- reporting -----------------------------------------------------------------------
 
@@ -283,7 +326,9 @@ class EstimatorBase:
         readings of the last sample that arrived."""
         return describe_faults(self.estimate.flags if flags is None else flags, self._input,
                                self._foot_reason, self.config.quaternion_tolerance,
-                               self.config.quaternion_timeout_s, self.quaternion_note)
+                               self.config.quaternion_timeout_s, self.quaternion_note,
+                               (float(self._foot_cal[CAL_SUM]),
+                                float(self._foot_cal[CAL_WEIGHT])))
 
 
 class StateEstimator(EstimatorBase):

@@ -59,8 +59,8 @@ def _scalar_update(x, P, plus, minus, measured, variance, gain, projected):  # p
 def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, force_in,
               schedule, dt_nominal, params, imu_offset, rotations, translations, axes,
               foot_offsets, foot_position, foot_jacobian, foot_angular_jacobian, clock, state,
-              x, P, foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, joint_q,
-              joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
+              x, P, foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
+              joint_q, joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
     """One tick of the estimator (see the module docstring); returns the fault flags.
 
     ``state`` holds the orientation (w, x, y, z), the gyro bias, the yaw alignment, the last
@@ -121,7 +121,7 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                                rotations, translations, axes, foot_offsets, foot_position,
                                foot_jacobian, foot_angular_jacobian, legs_work, joint_q,
                                joint_dq, foot_contact, foot_same_s, foot_good_s, foot_reason,
-                               foot_last, weight)
+                               foot_last, foot_cal, weight)
     foot_motion(rotation, omega, joint_dq, imu_offset, foot_position, foot_jacobian,
                 foot_angular_jacobian, radius, relative, velocity, rolling, motion_work)
     # --- prediction: the accelerometer, world frame
