@@ -8,6 +8,7 @@ import io
 import json
 import os
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -80,7 +81,9 @@ def test_a_go2_standing_still_passes_with_its_rate_framing_pose_and_imu_at_rest(
     text = _text(report)
     assert report.ok, text
     assert report.figures["rate_hz"] == pytest.approx(500.0)
-    assert "head FE EF, level_flag 0xFF, CRC valid in every state, tick counting" in text
+    assert ("framing   go2 (a GO2 or go2-wbc bridge): head FE EF, CRC checked; a new sample "
+            "has a new tick; level_flag 0xFF") in text
+    assert "500 new samples, 0 repeat(s), 0 frame(s) dropped" in text
     assert report.figures["posture"] == "standing"
     assert report.figures["base_height_m"] == pytest.approx(0.335, abs=0.01)  # the SRDF pose
     assert report.figures["still"] is True
@@ -88,15 +91,22 @@ def test_a_go2_standing_still_passes_with_its_rate_framing_pose_and_imu_at_rest(
     np.testing.assert_allclose(report.figures["gyro_bias_rad_s"], 0.003, atol=0.001)
     assert report.figures["gravity_m_s2"] == pytest.approx(GRAVITY_M_S2, abs=0.01)
     assert "nobody else writes rt/lowcmd" in text
-    assert text.splitlines()[-2] == "settings to use:"
+    assert text.splitlines()[-4:] == [
+        "settings to use:",
+        "  stream go2: run --dds recognises it by itself (no option)",
+        ("  staleness limit: run --dds derives it from the rate at its start (40 ms at 500 Hz: "
+         "20 periods or twice the longest gap, 20 to 250 ms)"),
+        ("  gyroscope bias and gravity in range: the estimator learns the bias as it runs (no "
+         "option)")]
 
 
 def test_unitree_python_framing_is_accepted_with_no_crc_no_tick_and_no_foot_force():
     report = check_stream(_stream(framing="python", joints=LYING))
     text = _text(report)
     assert report.ok, text
-    assert ("head 00 00, level_flag 0x00, CRC absent (0 in every state: not checked), tick "
-            "absent (always 0: samples told apart by their content)") in text
+    assert ("unitree-python (Unitree's Python simulator (unitree_mujoco simulate_python)): "
+            "head 00 00, no CRC (sent as 0: not checked); tick not counting") in text
+    assert "foot force absent: contact from the schedule only" in text
     assert report.figures["foot_force_absent"] is True
     assert report.figures["posture"] == "lying"
     assert report.figures["base_height_m"] < 0.15
@@ -112,7 +122,8 @@ def test_a_frozen_stream_a_wrong_crc_and_joints_out_of_range_are_problems():
     assert not crc_ok(stream.records[7])
     wrong = check_stream(stream)
     assert [f.topic for f in wrong.problems] == ["framing"]
-    assert "CRC wrong in 1 of 500 states" in wrong.problems[0].text
+    assert "499 new samples, 0 repeat(s), 1 frame(s) dropped (the last because LowState_.crc:" \
+        in wrong.problems[0].text
 
     joints = STANDING.copy()
     joints[JOINT_NAMES.index("RL_calf_joint")] = 0.5  # a calf bent the wrong way
@@ -152,6 +163,10 @@ def test_check_against_the_bridge_exits_0_and_on_an_empty_domain_exits_4(tmp_pat
     thread.start()
     out = io.StringIO()
     try:
+        deadline = time.monotonic() + 30.0  # its topics made first: two threads making the
+        while not bridge.is_started:         # same topic at once is refused by Cyclone
+            assert time.monotonic() < deadline, "the bridge did not start"
+            time.sleep(0.01)
         from sim.cli.check import run_check
         from sim.cli.parser import build_parser
         args = build_parser().parse_args(
@@ -164,7 +179,7 @@ def test_check_against_the_bridge_exits_0_and_on_an_empty_domain_exits_4(tmp_pat
         bridge.close()
     text = out.getvalue()
     assert code == 0, text
-    assert "CRC valid in every state, tick counting" in text
+    assert "framing   go2 (a GO2 or go2-wbc bridge)" in text
     report = json.loads((tmp_path / "check.json").read_text())
     assert report["ok"] is True
     assert report["figures"]["rate_hz"] == pytest.approx(500.0, rel=0.05)

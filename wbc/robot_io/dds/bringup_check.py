@@ -22,7 +22,6 @@ It ends with the settings to use, or with what is wrong.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -31,8 +30,8 @@ import pinocchio as pin
 
 from wbc.model.description import FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
 from wbc.model.joint_map import JointMap
-from wbc.robot_io.dds.c_layout import HEAD, LEVEL_FLAG_LOW, crc_ok
 from wbc.robot_io.dds.low_state_conversion import sensor_record_from_low_state
+from wbc.robot_io.dds.low_state_stream import LowStateStream, default_stale_after_s
 from wbc.robot_io.dds.state_listener import ListenedStream
 from wbc.robot_io.sensor_record import SensorRecord
 
@@ -54,7 +53,6 @@ GRAVITY_TOLERANCE = 0.05
 GYRO_BIAS_LIMIT_RAD_S = 0.05
 #: Fewest states for a verdict.
 MIN_STATES = 10
-_HEAD = np.array(HEAD, dtype=np.uint8)
 
 
 @dataclass(frozen=True)
@@ -130,7 +128,7 @@ def check_stream(stream: ListenedStream, *,
         _check_commands(report, stream)
         return report
     _check_timing(report, stream)
-    _check_framing(report, stream.records)
+    _check_framing(report, stream)
     samples = [sensor_record_from_low_state(r) for r in stream.records]
     q = np.array([s.q for s in samples])
     _check_joints(report, q, description)
@@ -138,7 +136,32 @@ def check_stream(stream: ListenedStream, *,
     _check_imu(report, samples, still=still)
     _check_feet(report, np.array([s.foot_force for s in samples]))
     _check_commands(report, stream)
+    _settings(report)
     return report
+
+
+def _settings(report: BringupReport) -> None:
+    """The settings the findings lead to (printed when nothing is a problem)."""
+    figures, settings = report.figures, report.settings
+    kind = figures.get("kind")
+    if kind is not None:
+        settings.append(f"stream {kind}: run --dds recognises it by itself (no option)")
+    period = figures.get("period_s")
+    if isinstance(period, float):
+        gap = float(figures["longest_gap_s"])  # type: ignore[arg-type]
+        limit = default_stale_after_s(period, gap)
+        first = default_stale_after_s(period)
+        settings.append(
+            f"staleness limit: run --dds derives it from the rate at its start ({first * 1e3:.0f}"
+            f" ms at {1.0 / period:.0f} Hz: 20 periods or twice the longest gap, 20 to 250 ms)"
+            + (f"; gaps of {gap * 1e3:.0f} ms came later here: --stale-after {limit:.3g}"
+               if limit > first else ""))
+    if figures.get("foot_force_absent"):
+        settings.append("foot force absent: contact from the schedule only (run --dds does "
+                        "it by itself when every count is 0)")
+    if figures.get("still") and "gyro_bias_rad_s" in figures:
+        settings.append("gyroscope bias and gravity in range: the estimator learns the bias "
+                        "as it runs (no option)")
 
 
 def _check_timing(report: BringupReport, stream: ListenedStream) -> None:
@@ -163,49 +186,35 @@ def _check_timing(report: BringupReport, stream: ListenedStream) -> None:
                              "simulator on one domain; stop all but one", problem=True)
 
 
-def _check_framing(report: BringupReport, records: list[np.ndarray]) -> None:
-    heads = {bytes(r["head"]).hex(" ").upper() for r in records}
-    flags = {int(r["level_flag"]) for r in records}
-    crcs = np.array([int(r["crc"]) for r in records])
-    valid = np.array([crc_ok(r) for r in records])
-    ticks = np.array([int(r["tick"]) for r in records], dtype=np.int64)
-    steps = np.diff(ticks) % (1 << 32)
-    content = [_content(r) for r in records]
-    repeats = sum(1 for a, b in itertools.pairwise(content) if a == b)
-    report.figures.update(heads=sorted(heads), level_flags=sorted(flags),
-                          crc_valid=int(valid.sum()), crc_zero=int((crcs == 0).sum()),
-                          repeated_samples=repeats)
-    if valid.all():
-        crc = "valid in every state"
-    elif (crcs == 0).all():
-        crc = "absent (0 in every state: not checked)"
-    else:
-        crc = f"wrong in {int((~valid).sum())} of {len(records)} states"
-    if (ticks == 0).all():
-        tick = "absent (always 0: samples told apart by their content)"
-    elif (steps == 0).all():
-        tick = f"frozen at {ticks[0]}"
-    else:
-        tick = (f"counting (steps: median {int(np.median(steps))}, "
-                f"{int((steps == 0).sum())} repeats)")
-    report.add("framing", f"head {'/'.join(sorted(heads))}, level_flag "
-                          f"{'/'.join(f'0x{f:02X}' for f in sorted(flags))}, CRC {crc}, tick "
-                          f"{tick}, {repeats} sample(s) identical to the one before",
-               problem=not (valid.all() or (crcs == 0).all()))
-    if len(set(content)) == 1:
-        report.add("framing", "every state is the same: the stream keeps arriving but never "
-                              "changes (a frozen sensor stream)", problem=True)
-    elif ticks.any() and (steps == 0).all():
-        report.add("framing", f"the tick stays at {ticks[0]} while the content changes",
-                   problem=False)
-    if heads != {" ".join(f"{b:02X}" for b in _HEAD)} or flags != {LEVEL_FLAG_LOW}:
-        report.figures["unitree_simulator_framing"] = True
-
-
-def _content(record: np.ndarray) -> bytes:
-    """The sensor values of a state (IMU, motors, feet), without its counters."""
-    return (record["imu_state"].tobytes() + record["motor_state"].tobytes()
-            + record["foot_force"].tobytes())
+def _check_framing(report: BringupReport, stream: ListenedStream) -> None:
+    """The stream's kind as ``go2-wbc run --dds`` recognises it (the same
+    :class:`~wbc.robot_io.dds.low_state_stream.LowStateStream`), judged over every state."""
+    states = LowStateStream()
+    for record, sent in zip(stream.records, stream.sent_s, strict=True):
+        states.accept(record, float(sent))
+    kind = states.decide()
+    counters = states.counters
+    flags = sorted({int(r["level_flag"]) for r in stream.records})
+    report.figures.update(stream=states.report(), level_flags=flags)
+    if kind is None:
+        report.add("framing", f"no frame of a known kind: {states.last_fault}", problem=True)
+        return
+    report.figures["kind"] = kind.framing
+    report.add("framing", f"{kind.framing} ({kind.sender}): {kind.checks()}; level_flag "
+                          f"{'/'.join(f'0x{f:02X}' for f in flags)}")
+    report.add("framing", f"{counters.new_samples} new samples, {counters.repeats} "
+                          f"repeat(s), {counters.dropped} frame(s) dropped"
+                          + (f" (the last because {states.last_fault})" if counters.dropped
+                             else ""), problem=counters.dropped > 0)
+    sensed = {r["imu_state"].tobytes() + r["motor_state"].tobytes() + r["foot_force"].tobytes()
+              for r in stream.records}
+    if len(sensed) == 1:
+        report.add("framing", f"every state carries the same sensor values ({counters.new_samples}"
+                              " told apart by the tick alone): the stream keeps arriving but "
+                              "never changes (a frozen sensor stream)", problem=True)
+    elif counters.tick_frozen:
+        report.add("framing", f"the tick stayed put while the content changed in "
+                              f"{counters.tick_frozen} state(s): the tick froze", problem=True)
 
 
 def _check_joints(report: BringupReport, q: np.ndarray, description: Go2Description) -> None:
