@@ -73,7 +73,7 @@ from wbc.estimation.state_estimator_kernels import (
 )
 from wbc.model.description import Go2Description
 from wbc.model.leg_kinematics import LegKinematics
-from wbc.robot_io.sensor_record import SensorRecord
+from wbc.robot_io.sensor_record import SensorRecord, check_description_orders
 
 #: ``clock``'s entry of the time without a trusted sample (see
 #: :func:`wbc.estimation.shared_kernels.check_sample`).
@@ -171,6 +171,7 @@ class EstimatorBase:
             ConfigurationError: A record that cannot start the estimator (the field named);
                 nothing is changed.
         """
+        check_description_orders(record, self, "reset")
         if not isinstance(record, SensorRecord):
             raise ConfigurationError(
                 f"record: expected a SensorRecord, received {type(record).__name__}")
@@ -232,6 +233,7 @@ class EstimatorBase:
         if record is None:  # the kernel reads nothing of a sample that did not come
             fresh, record = False, self._input
         else:
+            check_description_orders(record, self, "update")
             fresh, self._input = True, record
         self._fresh = fresh
         if self._tick is None:
