@@ -340,9 +340,9 @@ class DdsBridge:
         # Stamped before the write: a reply can arrive while write() is still returning.
         written_s, written_ns = self._clock(), time.time_ns()
         self._state_writer.write(self._state_message)
-        self.stats.published(self.tick, written_s, written_ns)
-        truth = sim_truth_record(self.sim, self.framing.state_tick(self._state, self.tick),
-                                 out=self._truth_message.record)
+        tick = self.framing.state_tick(self._state, self.tick)  # what a reply echoes
+        self.stats.published(tick, written_s, written_ns)
+        truth = sim_truth_record(self.sim, tick, out=self._truth_message.record)
         self._truth_writer.write(self._truth_message)
         if self.truth_log is not None:
             self.truth_log.append(truth)
