@@ -1,15 +1,26 @@
 """The kinds of ``rt/lowstate`` stream (:mod:`wbc.robot_io.dds.stream_kind`) and a stream's
 new samples, repeats, rate and staleness limit (:mod:`wbc.robot_io.dds.low_state_stream`), on
 synthetic ``LowState_`` records framed as a GO2, Unitree's C++ simulator and Unitree's Python
-simulator frame them (no DDS)."""
+simulator frame them (no DDS but in the last test: a DdsRobot on such a stream)."""
 
 from __future__ import annotations
 
+import os
+import time
+
 import numpy as np
 import pytest
+from cyclonedds.core import Policy, Qos
+from cyclonedds.pub import DataWriter
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
 
+from actions.robot.dds_robot import DdsRobot
+from actions.robot.state_fallback import stream_note
 from wbc.core.errors import ConfigurationError
 from wbc.robot_io.dds.c_layout import HEAD, LOW_STATE_DTYPE, set_crc, zero_record
+from wbc.robot_io.dds.domain_config import delete_entities, join_domain
+from wbc.robot_io.dds.go2_types import LOW_STATE_TOPIC
 from wbc.robot_io.dds.low_state_stream import (
     CLASSIFY_STATES,
     RATE_SAMPLES,
@@ -23,6 +34,7 @@ from wbc.robot_io.dds.stream_kind import (
     StreamKind,
     framing_of,
 )
+from wbc.robot_io.dds.wire_message import LowStateMessage
 
 
 def state(n: int, framing: str = GO2, *, tick: int | None = None,
@@ -119,7 +131,7 @@ def test_python_simulator_repeats_are_told_by_their_bytes_and_named_when_frozen(
         "rt/lowstate keeps arriving (7 state(s) in the last 995 ms) but never changes: the "
         "same bytes each time (tick 0): a frozen sensor stream")
     assert fed(stream, [state(11, UNITREE_PYTHON)], start_s=1.05) == [True]
-    assert stream.stale_reason(1.06) == "no rt/lowstate for 10 ms"
+    assert stream.stale_reason(1.06) == ""  # nothing arrived since the new one
 
 
 def test_a_counting_tick_that_freezes_makes_repeats_even_when_the_content_changes():
@@ -222,3 +234,47 @@ def test_a_python_simulator_stream_with_gaps_gets_a_limit_above_its_gaps():
     assert stream.stale_after_s() == pytest.approx(max(0.1, 2.0 * stream.longest_gap_s))
     assert stream.stale_after_s() > 0.05  # the longest gap measured on that simulator
     assert LowStateStream().stale_after_s() == 0.25  # unknown rate: the ceiling
+
+
+# -- a DdsRobot on such a stream (in-process DDS) ---------------------------------------------
+
+
+def test_a_dds_robot_uses_a_python_simulator_stream_and_names_it_when_frozen():
+    """Head 00 00, crc 0, tick 0: every new state used, repeats not; a stream that keeps
+    arriving unchanged is named in the note the fallback's reason carries."""
+    domain = 190 + os.getpid() % 10
+    dds = join_domain("lo", domain_id=domain)
+    writer = DataWriter(dds.participant, Topic(dds.participant, LOW_STATE_TOPIC,
+                                               LowStateMessage),
+                        qos=Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
+                                Policy.History.KeepLast(1)))
+    robot = DdsRobot(domain_id=domain, interface="lo", dry_run=True)
+    try:
+        deadline = time.monotonic() + 10.0
+        while not writer.get_publication_matched_status().current_count:
+            assert time.monotonic() < deadline, "the robot's reader did not match"
+            time.sleep(0.01)
+        sent = [state(n, UNITREE_PYTHON) for n in range(1, 8)]
+        for record in sent:
+            writer.write(LowStateMessage(record))
+            time.sleep(0.005)
+        first = robot.wait_for_first_state(5.0)
+        assert robot.stream.kind == StreamKind(UNITREE_PYTHON, ticks=False)
+        assert first.tick == robot.stream.counters.new_samples  # a count: the estimator's
+        assert robot.read_sensors() is not None and robot.read_sensors() is None
+        for _ in range(5):  # the same bytes again
+            writer.write(LowStateMessage(sent[-1]))
+            time.sleep(0.005)
+            assert robot.read_sensors() is None
+        assert robot.counters.repeated_states == 5 and robot.counters.bad_frames == 0
+        assert stream_note(robot).startswith(
+            "; rt/lowstate keeps arriving (5 state(s) in the last ")
+        assert stream_note(robot).endswith("but never changes: the same bytes each time "
+                                           "(tick 0): a frozen sensor stream")
+        writer.write(LowStateMessage(state(9, UNITREE_PYTHON)))
+        time.sleep(0.02)
+        assert robot.read_sensors() is not None and stream_note(robot) == ""
+    finally:
+        robot.close()
+        delete_entities(writer)
+        dds.close()

@@ -220,7 +220,7 @@ class DdsRobot:
         return self.stream.stale_after_s()
 
     def stale_reason(self) -> str:
-        """Why no new state came since the last one, for a fault message."""
+        """What arrived since the last new state, when frames did, for a fault message."""
         return self.stream.stale_reason(self._clock())
 
     def read_sensors(self) -> SensorRecord | None:

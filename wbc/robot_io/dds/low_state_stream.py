@@ -216,8 +216,9 @@ class LowStateStream:
         return self.counters.new_samples > 0 and not self.foot_force_seen
 
     def stale_reason(self, now_s: float) -> str:
-        """Why no new sample came since the last one, in words: frames that keep arriving
-        but never change (named as such), dropped frames, or nothing at all."""
+        """What arrived since the last new sample, in words, when frames did: frames that
+        keep arriving but never change (named as such), or only dropped frames; '' when
+        nothing arrived since (the estimator's "no sensor sample" says it)."""
         age_ms = (now_s - self._new_s) * 1e3
         repeats, changed, dropped = self._since_new
         if repeats:
@@ -231,7 +232,7 @@ class LowStateStream:
         if dropped:
             return (f"{dropped} rt/lowstate frame(s) in the last {age_ms:.0f} ms, all dropped, "
                     f"the last because {self.last_fault}")
-        return f"no rt/lowstate for {age_ms:.0f} ms"
+        return ""
 
     def describe(self) -> str:
         """What was recognised, at the start: the kind, its checks, the measured rate, the
