@@ -65,7 +65,7 @@ RAISED_RMS_MAX_MM, HOLDING_RMS_MAX_MM = 5.0, 3.0
 VELOCITY_RMS_MAX_MM_S, HEIGHT_MAX_MM, ROLL_PITCH_MAX_DEG = 20.0, 3.0, 0.3
 TILT_MAX_DEG = 3.0
 #: A silent robot gets the damped fallback command after the controller's staleness limit
-#: (its report's ``stale_after_s``: the estimator's ``trust_timeout_s``, 10 ms) plus at most
+#: (its report's ``stale_after_s``: 40 ms at 500 Hz, from the rate measured at start) plus at most
 #: this [s]: a control period, and several more of scheduling on a busy CI machine (quiet,
 #: 0.6 to 3.4 ms were measured).
 DAMP_SLACK_S = 10.0 / RATE_HZ
