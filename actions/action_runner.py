@@ -325,6 +325,24 @@ class ActionRunner:
             finally:
                 self._tick_thread = None
 
+    def abort_goals(self, now_s: float, reason: str) -> None:
+        """End the running goal and the queued ones ABORTED with ``reason`` (the running
+        goal's behaviour is canceled first, so it can release the robot); later goals are
+        processed as usual. Between ticks, on the ticking thread.
+
+        Raises:
+            ConfigurationError: ``now_s`` is not finite or is earlier than the previous tick.
+            ActionUsageError: Called from inside a tick callback.
+        """
+        self._refuse_reentry()
+        with self._tick_lock:
+            self._enter_tick(now_s)
+            try:
+                if not self._shut_down:
+                    self._goals.abort_all(reason)
+            finally:
+                self._tick_thread = None
+
     def _refuse_reentry(self) -> None:
         if self._tick_thread == threading.get_ident():
             raise ActionUsageError(

@@ -137,6 +137,14 @@ class GoalLifecycle:
         for request in requests:
             if isinstance(request, GoalRequest):
                 self.reject(request, self.shut_down_rejection())
+        self.abort_all(reason)
+        for request in requests:
+            if isinstance(request, CancelRequest):
+                self.process_cancel(request)
+
+    def abort_all(self, reason: str) -> None:
+        """End the active goal (its behaviour canceled first, so it can release the robot)
+        and the queued ones ABORTED with ``reason``."""
         active = self.active
         if active is not None:
             if active.status == GoalStatus.EXECUTING:
@@ -145,9 +153,6 @@ class GoalLifecycle:
                 self._abort(active, f"{reason} while the goal was {active.status.name}")
         while self.queue:
             self._abort(self.queue.popleft(), f"{reason} before the goal started")
-        for request in requests:
-            if isinstance(request, CancelRequest):
-                self.process_cancel(request)
 
     def _busy_rejection(self) -> Rejection:
         running = self.active if self.active is not None else self.queue[0]

@@ -36,6 +36,7 @@ from actions.robot.realtime_loop import (
 )
 from actions.robot.rest_sequence import Phase
 from actions.robot.robot_interface import RobotWrapper
+from actions.robot.state_fallback import LoopMode
 from actions.robot.tick_log import TickLog
 from actions.robot.tick_stats import SERIES
 from sim.control_loop import ControlLoop as SimLoop
@@ -404,7 +405,7 @@ def test_its_staged_tick_is_the_control_loops_spin():
     assert summary["tick"]["max_ms"] >= summary["latency"]["max_ms"]
 
 
-def test_states_stopping_send_the_safe_command_abort_the_goal_and_control_resumes():
+def test_states_stopping_abort_the_goal_damp_and_control_resumes_after_a_stand():
     clock = FakeClock()
     loop, robot, plant = sim_loop()
     rt = realtime(loop, clock)
@@ -420,16 +421,21 @@ def test_states_stopping_send_the_safe_command_abort_the_goal_and_control_resume
         rt.tick()
         statuses.append(rt.last_output.status)
     robot.dropping = False
-    # The estimator's trust_timeout_s (10 ms) of ticks, then the safe command with the reason.
+    # The estimator's trust_timeout_s (10 ms) of ticks, then the fallback with the reason; the
+    # goal ends ABORTED at once, with it.
     assert statuses[:5] == [ControlStatus.OK] * 5
     assert statuses[6:] == [ControlStatus.FALLBACK] * 9
     assert rt.last_output.message.startswith("state estimate: no trustworthy sensor sample")
     assert rt.stats.no_fresh_state == 15 and rt.stats.watchdog_trips == 1
-    tick_until(rt, lambda: handle.status.is_terminal, "the goal to end (foot down)", 1500)
     assert handle.status == GoalStatus.ABORTED
     result = handle.get_result_async().result(0).result
-    assert "controller fault" in result.message and "no trustworthy sensor sample" in result.message
-    tick_until(rt, lambda: rt.last_output.status is ControlStatus.OK, "control to resume", 5)
+    assert result.message.startswith("the state stopped being trustworthy (state estimate: no "
+                                     "trustworthy sensor sample")
+    # States back: the estimator starts again and a stand goal stands the robot up.
+    rt.tick()
+    assert loop.fallback.mode is LoopMode.RECOVERING and loop.estimator.restarts == 1
+    assert rt.last_output.status is ControlStatus.OK
+    tick_until(rt, lambda: loop.ready, "the recovery stand to succeed", 1500)
     rt_ok = rt.stats.ticks
     for _ in range(250):  # half a second: it stays up
         rt.tick()

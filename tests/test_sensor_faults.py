@@ -1,5 +1,5 @@
 """Sensor faults in closed loop: the estimator reports what it distrusts and goes on with the
-rest; without trustworthy state the controller sends its safe command and the goal aborts."""
+rest; without trustworthy state the loop falls back to damping and the goal aborts."""
 
 from __future__ import annotations
 
@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from actions import GoalStatus, HighFiveGoal
-from benchmarks.robustness import HOLD_START_S, PUSH_INTO_HOLD_S, PlantCase, run_high_five
+from actions.go2.robot_context import tilt_deg
+from benchmarks.robustness import (
+    HOLD_START_S,
+    PUSH_INTO_HOLD_S,
+    PlantCase,
+    run_high_five,
+    standing_on_four_feet,
+)
 from sim.control_loop import ControlLoop
 from sim.mujoco_robot import MujocoRobot
 from sim.sensor_faults import FAULT_KINDS, FaultyRobot, SensorFault
@@ -86,14 +93,15 @@ def test_20_ms_without_trustworthy_samples_aborts_the_goal_with_the_reason(kind,
     episode, log = faulty_high_five(SensorFault(kind, IN_THE_HOLD_S, 0.02))
     assert episode.status is GoalStatus.ABORTED
     assert episode.message.startswith(
-        "aborted: controller fault (state estimate: no trustworthy sensor sample for 11 ms "
-        "(limit 10 ms): " + words)
-    assert episode.message.endswith("the foot was put down and the robot is back on four feet")
-    # 10 ms on the estimate's prediction, then the safe command until samples return.
+        "the state stopped being trustworthy (state estimate: no trustworthy sensor sample for "
+        "11 ms (limit 10 ms): " + words)
+    # 10 ms on the estimate's prediction, then the fallback until samples return; then the
+    # recovery stand (the raised foot put down first) within the run's time after the goal.
     assert log.statuses.count(ControlStatus.FALLBACK) == 10
-    # The urgent foot-down (1.5 m/s) tilts the base 3.9 deg at most, measured.
-    assert episode.standing and not episode.fell
-    assert episode.max_tilt_deg < 6.0 and episode.final_tilt_deg < 1.0
+    assert not episode.fell and episode.max_tilt_deg < 6.0
+    episode.loop.spin_for(2.0)
+    assert episode.loop.ready and standing_on_four_feet(episode.loop)
+    assert tilt_deg(episode.loop.true_state()[0]) < 1.0
     again = episode.loop.client("high_five").send_goal_and_wait(
         HighFiveGoal(target_height=0.3, hold_seconds=0), timeout=15.0)
     assert again.status is GoalStatus.SUCCEEDED, again.result.message

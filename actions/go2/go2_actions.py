@@ -31,9 +31,14 @@ from actions.go2.go2_interfaces import (
     StandFeedback,
     StandResult,
 )
-from actions.go2.high_five_behaviour import HighFiveBehaviour, validate_high_five_goal
+from actions.go2.high_five_behaviour import (
+    ROBOT_NOT_READY,
+    HighFiveBehaviour,
+    validate_high_five_goal,
+)
 from actions.go2.pose_behaviour import PoseBehaviour, validate_pose_goal
 from actions.go2.robot_context import RobotContext
+from actions.responses import GoalResponse, Rejection
 from actions.ros_interfaces.control_msgs import FOLLOW_JOINT_TRAJECTORY
 
 #: Action names served for the GO2.
@@ -63,10 +68,21 @@ class Go2Action:
 
     def serve(self, runner: ActionRunner, context: RobotContext) -> ActionServer:
         """The action's server on ``runner``, its behaviours and goal checks on ``context``."""
-        goal_callback = (None if self.goal_callback is None
-                         else partial(self.goal_callback, context))
+        goal_callback = partial(_gated, context, self.goal_callback)
         return ActionServer(runner, self.interface, self.name, partial(self.behaviour, context),
                             goal_callback=goal_callback, max_unwind_s=self.max_unwind_s)
+
+
+def _gated(context: RobotContext, callback: Callable[[RobotContext, Any], Decision] | None,
+           goal: Any) -> Decision:
+    """A goal refused while the loop has no trustworthy state (``context.goal_refusal``),
+    else ``callback``'s decision (accepted when there is none)."""
+    if context.goal_refusal:
+        if context.admit_once is not None and isinstance(goal, context.admit_once):
+            context.admit_once = None
+        else:
+            return Rejection(ROBOT_NOT_READY, f"robot not able: {context.goal_refusal}")
+    return GoalResponse.ACCEPT if callback is None else callback(context, goal)
 
 
 #: The GO2's actions, one line each.

@@ -42,6 +42,12 @@ class RobotContext:
         self.fault = ""
         #: Ticks in a row the controller could only send its damping fallback.
         self.consecutive_fallbacks = 0
+        #: Why goals are refused now ('' when they are accepted): the loop has no
+        #: trustworthy state, or is standing the robot up again after it had none.
+        self.goal_refusal = ""
+        #: One goal of this type is let through despite :attr:`goal_refusal` (the loop's own
+        #: recovery stand); cleared when it is.
+        self.admit_once: type | None = None
         #: Rows of ``foot_positions()`` that make each support polygon seen so far.
         self._support_rows: dict[tuple[str, ...], np.ndarray] = {}
         # The balance watch first runs when a foot unloads, mid-motion, where loading its

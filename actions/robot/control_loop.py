@@ -21,6 +21,7 @@ from actions.robot.robot_interface import (
     RobotInterface,
     check_robot,
 )
+from actions.robot.state_fallback import FallbackSettings, LoopMode, StateFallback
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.control_output import ControlOutput
 from wbc.core.errors import ConfigurationError
@@ -46,8 +47,11 @@ class ControlLoop:
     through a state estimator (by default :class:`wbc.InvariantEkf`: IMU, joint encoders,
     foot contact, and the controller's contact schedule) to the controller's ``(q, v)``.
     When the estimator has had no trustworthy sample for longer than its
-    ``trust_timeout_s``, the loop sends the controller's safe command with the reason
-    instead (a running goal then ends ABORTED), and resumes when samples return.
+    ``trust_timeout_s``, the loop falls back (:mod:`actions.robot.state_fallback`): the
+    running goal ends ABORTED with the reason, the held torques decay to pure joint
+    damping, goals are refused; when trustworthy samples return, the estimator starts again
+    from them and a ``stand`` goal stands the robot up before goals are accepted again. A
+    loop whose robot has no usable sample at start waits the same way.
     ``state="truth"`` hands the controller the simulator's exact state instead (a simulator
     only; for comparisons).
 
@@ -60,7 +64,8 @@ class ControlLoop:
     def __init__(self, robot: RobotInterface, controller: BalanceController, *,
                  busy_policy: BusyPolicy = BusyPolicy.REJECT,
                  aliases: dict[str, str] | None = None, state: str = "estimate",
-                 estimator: EstimatorBase | None = None):
+                 estimator: EstimatorBase | None = None,
+                 fallback: FallbackSettings | None = None):
         """Args:
             robot: The robot in its own joint order (simulated or real).
             controller: The balance controller (reset to the robot's state here).
@@ -69,16 +74,17 @@ class ControlLoop:
             state: ``estimate`` (the default: the state estimator on the robot's sensors) or
                 ``truth`` (the robot's exact state: simulators only).
             estimator: The state estimator (by default :mod:`wbc.estimation.estimators`' default
-                for the controller's control period); started here on the robot's first sample,
-                on four loaded feet.
+                for the controller's control period); started on the robot's first sample
+                that can start it, on four loaded feet (until then the loop waits, damping).
+            fallback: The fallback's decay, damping and recovery stand
+                (:class:`~actions.robot.state_fallback.FallbackSettings`).
 
         Raises:
             UnknownNameError: An unknown ``state``.
             ConfigurationError: A robot that lacks a member or does not declare its
                 orders (:func:`~actions.robot.robot_interface.check_robot`: every missing
-                one named); ``truth`` from a robot that does not know its exact state or
-                with an estimator, or a first sample the estimator cannot start from (the
-                field named).
+                one named), ``truth`` from a robot that does not know its exact state or
+                with an estimator.
         """
         check_name("state source", state, STATE_SOURCES)
         check_robot(robot, state=state)  # every missing member named, before any is used
@@ -94,18 +100,16 @@ class ControlLoop:
         self.runner.set_spinner(self.spin_once)
         self._bounds = np.zeros(len(LEGS))
         self.estimator: EstimatorBase | None = None
+        #: The loop's mode and its fallback while the state is not trustworthy.
+        self.fallback = StateFallback(self, fallback)
         if state == "truth":
             q, v = self.robot.read_state()
         else:
             self.estimator = estimator or make_estimator(
                 control_period_s=controller.control_period_s)
-            record = self.robot.read_sensors()
-            if record is None:
-                raise ConfigurationError(
-                    "robot: no sensor sample to start the state estimator from")
-            estimate = self.estimator.reset(record)
-            q, v = estimate.q.copy(), estimate.v.copy()
-        controller.reset(q, v)
+            q, v = self.estimate_state(self.robot.read_sensors())
+        if self.fallback.mode is LoopMode.CONTROLLING:
+            controller.reset(q, v)
         self._effort_limit = Go2Description.default().effort_limit
         self.context.observe(self.robot.time_s, q, v)
         self.hooks: list[TickHook] = []
@@ -132,25 +136,39 @@ class ControlLoop:
 
     def estimate_state(self, record: SensorRecord | None) -> tuple[np.ndarray, np.ndarray]:
         """The estimator's tick on ``record`` (``None``: no sample this period) and the
-        controller's contact schedule; ``(q, v)`` as new arrays."""
-        self.controller.schedule.normal_force_bounds(self._bounds)
-        estimate = self.estimator.update(record, self._bounds)
+        controller's contact schedule; ``(q, v)`` as new arrays.
+
+        Until a sample can start the estimator (finite joints and gyroscope, an attitude:
+        :meth:`~wbc.estimation.state_estimator.EstimatorBase.start_problem`) the loop waits
+        (:class:`~actions.robot.state_fallback.LoopMode` ``WAITING``); the estimator then
+        starts from it, on four loaded feet.
+        """
+        estimator = self.estimator
+        if not estimator.started:
+            problem = estimator.start_problem(record)
+            if problem:
+                self.fallback.wait(problem, self.robot.time_s)
+                return estimator.estimate.q.copy(), estimator.estimate.v.copy()
+            estimate = estimator.reset(record)
+        else:
+            self.controller.schedule.normal_force_bounds(self._bounds)
+            estimate = estimator.update(record, self._bounds)
         return estimate.q.copy(), estimate.v.copy()
 
     def true_state(self) -> tuple[np.ndarray, np.ndarray]:
         """The robot's exact ``(q, v)``, for metrics and tests (simulated robots only)."""
         return self.robot.read_state()
 
-    def command(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
-        """The controller's tick, or its safe command while the state is not trustworthy."""
-        estimator = self.estimator
-        if estimator is not None and not estimator.estimate.usable:
-            estimate = estimator.estimate
-            return self.controller.safe_command(v, (
-                f"state estimate: no trustworthy sensor sample for "
-                f"{estimate.untrusted_s * 1e3:.0f} ms (limit "
-                f"{estimator.config.trust_timeout_s * 1e3:g} ms): {estimate.faults}"))
-        return self.controller.step(q, v)
+    def command(self, q: np.ndarray, v: np.ndarray, *, stale: str = "") -> ControlOutput:
+        """The controller's tick, or the fallback while the state is not trustworthy
+        (:class:`~actions.robot.state_fallback.StateFallback`); ``stale``: a watchdog's
+        reason when it found the state stale."""
+        return self.fallback.command(q, v, stale=stale)
+
+    @property
+    def ready(self) -> bool:
+        """The loop controls the robot and accepts goals (``CONTROLLING``)."""
+        return self.fallback.mode is LoopMode.CONTROLLING
 
     def spin_once(self) -> ControlOutput:
         """One control period."""

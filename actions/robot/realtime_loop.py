@@ -21,12 +21,13 @@ than :data:`ALIGN_PAUSE_SHARE` of the waits of :data:`ALIGN_WINDOW_S` in vain) p
 alignment for :data:`ALIGN_PAUSE_S`; the loop then ticks on its own deadlines.
 
 Staleness: one limit, ``stale_after_s``, for two clocks. The estimator distrusts a robot that
-sends nothing new (``trust_timeout_s`` of ticks without a sample: the loop sends the
-controller's safe command with the reason, the running goal ends ABORTED, and control resumes
-when states return); it counts control periods, and a loop that misses deadlines takes longer
-than that. The watchdog here counts wall time: no fresh state for ``stale_after_s`` sends the
-safe command too, with its own reason. The loop sets the estimator's ``trust_timeout_s`` to
-``stale_after_s``, whose default is the robot's own (a
+sends nothing new (``trust_timeout_s`` of ticks without a sample); it counts control periods,
+and a loop that misses deadlines takes longer than that. The watchdog here counts wall time:
+no fresh state for ``stale_after_s``. Either makes the loop fall back
+(:mod:`actions.robot.state_fallback`): the running goal ends ABORTED with the reason, the held
+torques decay to pure joint damping, and once fresh trustworthy states return a ``stand``
+goal stands the robot up before goals are accepted again. The loop sets the estimator's
+``trust_timeout_s`` to ``stale_after_s``, whose default is the robot's own (a
 :class:`~actions.robot.dds_robot.DdsRobot`'s, from the rate measured at start: 40 ms at
 500 Hz, 100 ms at 200 Hz), else the estimator's.
 """
@@ -46,8 +47,9 @@ import numpy as np
 from actions.robot.deadline_clock import DEFAULT_SPIN_S, DeadlineClock
 from actions.robot.idle_collector import IdleCollector
 from actions.robot.rest_sequence import Phase, RestSequence, RestSettings
+from actions.robot.state_fallback import stream_note
 from actions.robot.tick_stats import SERIES, TickStats
-from wbc.controller.control_output import ControlOutput, ControlStatus
+from wbc.controller.control_output import ControlOutput
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import is_finite_real
 
@@ -275,7 +277,7 @@ class RealtimeLoop:
         if phase < Phase.DAMPING:
             loop.runner.tick(now)
             t2 = timer()
-            out = self._watchdog(loop.guard(loop.command(q, v), v), v, now)
+            out = loop.guard(loop.command(q, v, stale=self._watchdog(now)), v)
             loop.context.record_output(out)
             loop.last_output = out
             t3 = timer()
@@ -302,20 +304,18 @@ class RealtimeLoop:
         times[_GC], times[_TICK], times[_CPU] = t7 - t6, t7 - t0, self._cpu() - c0
         times[_LATENCY], times[_WAKE], times[_ALIGN] = t4 - t0, wake_s, align_s
 
-    def _watchdog(self, out: ControlOutput, v: np.ndarray, now_s: float) -> ControlOutput:
-        """``out``, or the safe command after ``stale_after_s`` without a fresh state."""
+    def _watchdog(self, now_s: float) -> str:
+        """Why the state is stale after ``stale_after_s`` without a fresh one ('' when it is
+        not): the loop then falls back (:mod:`actions.robot.state_fallback`)."""
         stale_s = now_s - self._last_fresh_s
         if stale_s <= self.stale_after_s:
             self._stale = False
-            return out
+            return ""
         if not self._stale:
             self._stale = True
             self.stats.watchdog_trips += 1
-        if out.status is ControlStatus.FALLBACK:
-            return out  # the estimator's safe command, with its reason
-        return self.loop.controller.safe_command(v, (
-            f"watchdog: no fresh robot state for {stale_s * 1e3:.0f} ms (limit "
-            f"{self.stale_after_s * 1e3:g} ms)"))
+        return (f"watchdog: no fresh robot state for {stale_s * 1e3:.0f} ms (limit "
+                f"{self.stale_after_s * 1e3:g} ms)" + stream_note(self.loop.robot))
 
     # -- reporting --------------------------------------------------------------------------
 
@@ -370,6 +370,7 @@ class RealtimeLoop:
                       "timeouts": self.align_timeouts, "pauses": self.align_pauses},
             "stop": {"reason": self.rest.stop_reason, "phase": self.rest.phase.name,
                      "notes": self.rest.notes},
+            "modes": [t.as_dict() for t in self.loop.fallback.log.transitions],
             "goals": [{"t_s": t, "goal_id": goal_id, "event": event, "detail": str(detail)}
                       for t, goal_id, event, detail in self.loop.runner.event_log
                       if event in ended],

@@ -24,9 +24,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from actions.go2.go2_actions import SIT_ACTION, STAND_ACTION
-from actions.go2.go2_interfaces import SitGoal, StandGoal
+from actions.go2.go2_actions import SIT_ACTION
+from actions.go2.go2_interfaces import SitGoal
 from actions.go2.robot_context import STANDING_HEIGHT_M
+from actions.goal_status import GoalStatus
+from actions.robot.state_fallback import send_stand
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import is_finite_real
 from wbc.model.description import JOINT_NAMES
@@ -112,10 +114,10 @@ class RestSequence:
         """Send a ``stand`` goal if the robot's base is below standing height (once); whether
         it was sent now."""
         if (self.stand is not None or not self.settings.stand_on_start
+                or self.loop.context.goal_refusal  # not controlling: the loop stands it
                 or self.loop.context.q[2] >= STANDING_HEIGHT_M):
             return False
-        self.stand = self.loop.client(STAND_ACTION).send_goal_async(
-            StandGoal(duration_s=self.settings.stand_s))
+        self.stand = send_stand(self.loop, self.settings.stand_s)
         return True
 
     def request_stop(self, reason: str) -> None:
@@ -168,13 +170,26 @@ class RestSequence:
         if future is None or not future.done():
             return
         handle = future.result()
-        if not handle.accepted:  # a goal came first: cancel it, then sit again
-            self.phase = Phase.UNWINDING
+        if not handle.accepted:
+            refusal = self.loop.context.goal_refusal
+            if refusal:  # no trustworthy state: no sit is possible
+                self._note(f"sit refused ({refusal})")
+                self._enter_damping(now_s, "not at rest: the robot could not be sat down")
+                return
+            self.phase = Phase.UNWINDING  # a goal came first: cancel it, then sit again
             self._unwind()
             return
-        if handle.status.is_terminal:
-            self._note(f"sit ended {handle.status.name}")
-            self._enter_damping(now_s, "at rest")
+        status = handle.status
+        if status.is_terminal:
+            height = float(self.loop.context.q[2])
+            if status is GoalStatus.SUCCEEDED:
+                self._note("sit ended SUCCEEDED")
+                self._enter_damping(now_s, "at rest")
+                return
+            result = handle.get_result_async()
+            message = result.result().result.message if result.done() else ""
+            self._note(f"sit ended {status.name}" + (f": {message}" if message else ""))
+            self._enter_damping(now_s, f"not at rest: base at {height:.2f} m")
 
     def _enter_damping(self, now_s: float, why: str) -> None:
         self._note(f"damping ({why})")

@@ -180,6 +180,8 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             + (" (DRY RUN: no command is published)" if args.dry_run else "")
             + "; Ctrl-C to bring the robot to rest and exit")
         rt.start()
+        if not loop.ready:
+            say(f"not controlling yet: {loop.fallback.log.reason}; motors damping")
         if rt.rest.stand is not None:
             say(f"the robot is down (base at {loop.context.q[2]:.3f} m): standing it up"
                 + (" (dry run: printed, not sent)" if args.dry_run else ""))
@@ -237,6 +239,9 @@ def _summary(report: dict[str, Any]) -> str:
                        for name in ("read", "actions", "controller", "write", "bridge",
                                     "hooks", "gc"))
     robot = report["robot"]
+    modes = "".join(f"\n  {mode['t_s']:.2f} s: {mode['mode']}"
+                    + (f" ({mode['reason']})" if mode["reason"] else "")
+                    for mode in report.get("modes", [])[1:])
     return (f"stopped ({report['stop']['reason'] or 'done'}; "
             f"{'; '.join(report['stop']['notes']) or 'no goal to unwind'}) after "
             f"{report['duration_s']:.1f} s: {report['ticks']} ticks at {report['rate_hz']:g} Hz, "
@@ -248,4 +253,5 @@ def _summary(report: dict[str, Any]) -> str:
             f"{series['tick']['mean_ms']:.3f}/{series['tick']['p99_ms']:.3f}, cpu "
             f"{series['cpu']['mean_ms']:.3f}/{series['cpu']['p99_ms']:.3f}, latency "
             f"{series['latency']['mean_ms']:.3f}/{series['latency']['p99_ms']:.3f}, wake "
-            f"{series['wake']['mean_ms']:.3f}/{series['wake']['p99_ms']:.3f}")
+            f"{series['wake']['mean_ms']:.3f}/{series['wake']['p99_ms']:.3f}"
+            + (f"\n  loop modes:{modes}" if modes else ""))

@@ -50,7 +50,7 @@ import numpy as np
 from wbc.core.compiled_call import bind_compiled
 from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.errors import ConfigurationError
-from wbc.core.validation import as_float, as_vector
+from wbc.core.validation import as_float
 from wbc.estimation.estimator_config import EstimatorConfig, SensorTrustConfig
 from wbc.estimation.foot_force_calibration import FootForceCalibration
 from wbc.estimation.shared_kernels import (
@@ -75,9 +75,21 @@ from wbc.model.description import Go2Description
 from wbc.model.leg_kinematics import LegKinematics
 from wbc.robot_io.sensor_record import SensorRecord, check_description_orders
 
+#: Gravity [m/s^2] an accelerometer at rest reads.
+_GRAVITY = 9.81
 #: ``clock``'s entry of the time without a trusted sample (see
 #: :func:`wbc.estimation.shared_kernels.check_sample`).
 _UNTRUSTED_S = 2
+
+
+def _level_quaternion(accel: np.ndarray) -> np.ndarray:
+    """The attitude (w, x, y, z), yaw 0, whose gravity the accelerometer ``accel`` [m/s^2]
+    reads at rest: it measures the specific force, ``R^T (0, 0, g)`` in the body frame."""
+    ax, ay, az = accel / np.linalg.norm(accel)
+    roll = np.arctan2(ay, az)
+    pitch = np.arctan2(-ax, np.hypot(ay, az))
+    cr, sr, cp, sp = np.cos(roll / 2), np.sin(roll / 2), np.cos(pitch / 2), np.sin(pitch / 2)
+    return np.array([cr * cp, sr * cp, cr * sp, -sr * sp])  # R = Ry(pitch) Rx(roll)
 
 
 class EstimatorBase:
@@ -105,6 +117,9 @@ class EstimatorBase:
     quaternion_note: ClassVar[str] = "orientation from the gyroscope"
     #: The kernels' scratch space [floats].
     work_size: ClassVar[int] = 0
+    #: The estimator cannot start without the IMU's quaternion (its orientation follows the
+    #: IMU's attitude filter); one that can takes roll and pitch from the accelerometer.
+    needs_quaternion_to_start: ClassVar[bool] = False
 
     def __init__(self, config: SensorTrustConfig | None = None, *,
                  description: Go2Description | None = None, control_period_s: float = 1e-3,
@@ -143,6 +158,12 @@ class EstimatorBase:
         self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
+        #: How often the estimator started again after its inputs were untrustworthy for
+        #: longer than ``trust_timeout_s`` (:meth:`update`).
+        self.restarts = 0
+        #: What the last start had to do without ('' when nothing).
+        self.start_note = ""
+        self._lost_xy = (0.0, 0.0)  # the base's place [m] when trust was lost
 
     def _filter_arrays(self) -> tuple[np.ndarray, ...]:
         raise NotImplementedError
@@ -156,13 +177,44 @@ class EstimatorBase:
 
     # -- start ---------------------------------------------------------------------------
 
+    def start_problem(self, record: SensorRecord | None) -> str:
+        """Why ``record`` cannot start the estimator ('' when it can), the field named.
+
+        A start needs finite joint angles and velocities, a finite gyroscope, and the
+        attitude: a unit IMU quaternion or, where the estimator does not need one
+        (:attr:`needs_quaternion_to_start`), a finite accelerometer reading gravity.
+        """
+        if record is None:
+            return "no sensor sample"
+        if not isinstance(record, SensorRecord):
+            return f"record: expected a SensorRecord, received {type(record).__name__}"
+        for name in ("q", "dq", "gyroscope_rad_s"):
+            values = np.asarray(getattr(record, name), dtype=float)
+            if not np.isfinite(values).all():
+                return f"{name}: non-finite reading {values.tolist()}"
+        quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
+        norm = float(np.linalg.norm(quat))
+        if abs(norm - 1.0) <= self.config.quaternion_tolerance:
+            return ""
+        why = (f"imu_quaternion_wxyz: expected a unit quaternion (w, x, y, z), received "
+               f"{quat.tolist()} (norm {norm:g})")
+        if self.needs_quaternion_to_start:
+            return why
+        accel = np.asarray(record.accelerometer_m_s2, dtype=float)
+        gravity = float(np.linalg.norm(accel))
+        if not np.isfinite(accel).all() or not 0.5 * _GRAVITY < gravity < 1.5 * _GRAVITY:
+            return (f"{why}, and accelerometer_m_s2: expected gravity's {_GRAVITY:g} m/s^2 at "
+                    f"rest to take roll and pitch from, received {accel.tolist()}")
+        return ""
+
     def reset(self, record: SensorRecord, *, base_xy: tuple[float, float] = (0.0, 0.0),
               keep_yaw: bool = False) -> StateEstimate:
         """Start from ``record`` on four loaded feet, at rest (description order).
 
         Args:
-            record: The first sample: its quaternion and joint angles must be finite and
-                the quaternion a unit one.
+            record: The first sample (:meth:`start_problem` says what it needs). Without a
+                unit quaternion (an estimator that does not need one), roll and pitch come
+                from the accelerometer, which reads gravity at rest, and the yaw is 0.
             base_xy: Where the base is in the estimator's world [m] (the origin by default).
             keep_yaw: Keep the IMU's yaw; by default the estimator's world has the base's
                 heading at zero.
@@ -172,17 +224,16 @@ class EstimatorBase:
                 nothing is changed.
         """
         check_description_orders(record, self, "reset")
-        if not isinstance(record, SensorRecord):
-            raise ConfigurationError(
-                f"record: expected a SensorRecord, received {type(record).__name__}")
-        quat = as_vector("imu_quaternion_wxyz", record.imu_quaternion_wxyz, 4)
-        norm = float(np.linalg.norm(quat))
-        if abs(norm - 1.0) > self.config.quaternion_tolerance:
-            raise ConfigurationError(
-                f"imu_quaternion_wxyz: expected a unit quaternion (w, x, y, z) to start from, "
-                f"received {quat.tolist()} (norm {norm:g})")
-        joint_q = as_vector("q", record.q, 12)
-        as_vector("dq", record.dq, 12)
+        problem = self.start_problem(record)
+        if problem:
+            raise ConfigurationError(f"cannot start the state estimator: {problem}")
+        quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
+        self.start_note = ""
+        if abs(float(np.linalg.norm(quat)) - 1.0) > self.config.quaternion_tolerance:
+            quat = _level_quaternion(np.asarray(record.accelerometer_m_s2, dtype=float))
+            self.start_note = ("started without the IMU quaternion: roll and pitch from the "
+                               "accelerometer, yaw 0")
+        joint_q = np.asarray(record.q, dtype=float)
         self.start_kernel(quat, joint_q, self._params, *self._leg_arrays(),
                           *self._filter_arrays(), float(base_xy[0]), float(base_xy[1]),
                           bool(keep_yaw), self._work)
@@ -196,6 +247,7 @@ class EstimatorBase:
         self._clock[:] = (record.tick - 1, record.stamp_s - self.control_period_s, 0.0, 0.0)
         self._described = 0
         self.estimate.faults = ""
+        self.estimate.usable = True  # a fresh start: not a return after a gap
         self.started = True
         self._schedule[:] = np.inf  # four loaded feet
         return self.update(record, self._schedule)
@@ -251,11 +303,20 @@ class EstimatorBase:
             self._input = record
             flags = int(self._tick(fresh, record))
         estimate = self.estimate
+        was_usable = estimate.usable
         estimate.flags = flags
         estimate.trusted = not flags & UNTRUSTED
         estimate.untrusted_s = float(self._clock[_UNTRUSTED_S])
         # (A tolerance for the sum of periods: ten 1 ms ticks are 10 ms, not 10.000000000002.)
         estimate.usable = estimate.untrusted_s <= self.config.trust_timeout_s + 1e-9
+        if was_usable and not estimate.usable:
+            self._lost_xy = (float(estimate.q[0]), float(estimate.q[1]))
+        elif not was_usable and estimate.trusted and not self.start_problem(record):
+            # Back after longer than the trust limit: what was integrated across the gap
+            # (the last inputs, held) is discarded; start again from this sample where the
+            # base was when trust was lost (the yaw of a new world at 0, as at the start).
+            self.restarts += 1
+            return self.reset(record, base_xy=self._lost_xy)
         if flags != self._described:  # the text is built when what it says changes
             self._described = flags
             estimate.faults = self.describe(flags)
@@ -355,6 +416,8 @@ class StateEstimator(EstimatorBase):
     kernel = _estimate
     start_kernel = staticmethod(_start)
     work_size = _WORK_SIZE
+    # Its yaw alignment to the IMU's world is taken from the first quaternion.
+    needs_quaternion_to_start = True
     config: EstimatorConfig
 
     def __init__(self, config: EstimatorConfig | None = None, *,
