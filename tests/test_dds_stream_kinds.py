@@ -1,7 +1,8 @@
 """The kinds of ``rt/lowstate`` stream (:mod:`wbc.robot_io.dds.stream_kind`) and a stream's
 new samples, repeats, rate and staleness limit (:mod:`wbc.robot_io.dds.low_state_stream`), on
 synthetic ``LowState_`` records framed as a GO2, Unitree's C++ simulator and Unitree's Python
-simulator frame them (no DDS but in the last test: a DdsRobot on such a stream)."""
+simulator frame them (no DDS but in one test: a DdsRobot on such a stream); and the one
+staleness limit the loop shares with the estimator."""
 
 from __future__ import annotations
 
@@ -15,9 +16,17 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
+from actions.robot.control_loop import ControlLoop
 from actions.robot.dds_robot import DdsRobot
+from actions.robot.realtime_loop import RealtimeLoop
 from actions.robot.state_fallback import stream_note
+from sim.cli.parser import build_parser
+from sim.cli.run_dds import run_dds
+from sim.mujoco_robot import MujocoRobot
+from sim.simulator import Go2Simulator
+from wbc.controller.whole_body_controller import WholeBodyController
 from wbc.core.errors import ConfigurationError
+from wbc.estimation.estimators import make_estimator
 from wbc.robot_io.dds.c_layout import HEAD, LOW_STATE_DTYPE, set_crc, zero_record
 from wbc.robot_io.dds.domain_config import delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_STATE_TOPIC
@@ -278,3 +287,30 @@ def test_a_dds_robot_uses_a_python_simulator_stream_and_names_it_when_frozen():
         robot.close()
         delete_entities(writer)
         dds.close()
+
+
+# -- one staleness setting --------------------------------------------------------------------
+
+
+def test_the_loop_gives_the_estimator_its_staleness_limit():
+    """One limit: a RealtimeLoop's ``stale_after_s`` becomes the estimator's
+    ``trust_timeout_s`` (the estimator's 10 ms is not a second, tighter limit)."""
+    sim = Go2Simulator(timestep_s=1e-3)
+    plant = MujocoRobot(sim, control_period_s=0.002, sensor_seed=0)
+    sim.reset("standing")
+    plant.sensors.reset()
+    loop = ControlLoop(plant, WholeBodyController(control_period_s=0.002),
+                       estimator=make_estimator(control_period_s=0.002))
+    assert loop.estimator.config.trust_timeout_s == 0.01
+    rt = RealtimeLoop(loop, rate_hz=500, stale_after_s=0.1)
+    assert rt.stale_after_s == loop.estimator.config.trust_timeout_s == 0.1
+
+
+def test_run_dds_refuses_a_second_staleness_limit(capsys):
+    args = build_parser().parse_args(["run", "--dds", "--estimator-param",
+                                      "trust_timeout_s=0.5"])
+    with pytest.raises(SystemExit) as caught:
+        run_dds(args)
+    assert caught.value.code == 2
+    assert ("--estimator-param: trust_timeout_s: set by --stale-after (one limit for the "
+            "watchdog and the estimator)") in capsys.readouterr().err

@@ -11,6 +11,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from sim.bridge_config import BridgeConfig
+from sim.cli.bridge import bridge_config
+from sim.cli.parser import build_parser
 from sim.command_slot import COMMAND, STAND, CommandSlot
 from sim.state_framing import (
     GAP_MAX_S,
@@ -21,6 +24,7 @@ from sim.state_framing import (
     StateFraming,
     StateGaps,
 )
+from wbc.core.errors import ConfigurationError
 from wbc.robot_io.dds.c_layout import LOW_STATE_DTYPE, crc_ok, zero_record
 from wbc.robot_io.dds.low_state_conversion import low_state_from_sensor_record
 from wbc.robot_io.dds.stream_kind import framing_of
@@ -100,3 +104,22 @@ def test_a_unitree_slot_applies_no_torque_first_and_holds_the_last_command():
                            kd=np.zeros(12), tau_ff=np.full(12, 3.0))
     slot.update(command, now_s=1.0)
     assert slot.update(None, now_s=1000.0) is command and slot.mode == COMMAND
+
+
+@pytest.mark.parametrize("argv, expected", [
+    ([], (GO2, 500.0, "standing")),
+    (["--framing", "unitree-python"], (UNITREE_PYTHON, 200.0, "lying")),
+    (["--framing", "unitree-cpp"], (UNITREE_CPP, 500.0, "lying")),
+    (["--framing", "unitree-python", "--rate", "1000", "--pose", "standing"],
+     (UNITREE_PYTHON, 1000.0, "standing")),
+])
+def test_bridge_options_give_each_framing_its_rate_and_start_pose(argv, expected):
+    args = build_parser().parse_args(["bridge", *argv])
+    config = bridge_config(args)
+    assert (config.framing, config.rate_hz, config.pose) == expected
+
+
+def test_an_unknown_framing_is_refused_with_the_valid_ones():
+    with pytest.raises(ConfigurationError, match=r"^framing: expected one of go2, unitree-cpp, "
+                                                 r"unitree-python, received 'ros'$"):
+        BridgeConfig(framing="ros")
