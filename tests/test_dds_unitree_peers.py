@@ -34,7 +34,6 @@ def test_run_dds_against_a_unitree_framed_peer_stands_high_fives_and_sits(
     assert recognised in start and "foot_force absent" in start, start
     assert "foot contact from the schedule only" in start
     assert result.stale_after_s == pytest.approx(limit_s, rel=0.05)
-    assert result.watchdog_trips == 0
     stream = result.robot["stream"]
     assert stream["kind"] == framing and stream["dropped"] == 0
     if framing == UNITREE_PYTHON:  # its frozen gaps repeat a state: told by the content
