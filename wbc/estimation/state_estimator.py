@@ -229,7 +229,7 @@ class EstimatorBase:
             raise ConfigurationError(f"cannot start the state estimator: {problem}")
         quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
         self.start_note = ""
-        if abs(float(np.linalg.norm(quat)) - 1.0) > self.config.quaternion_tolerance:
+        if not abs(float(np.linalg.norm(quat)) - 1.0) <= self.config.quaternion_tolerance:
             quat = _level_quaternion(np.asarray(record.accelerometer_m_s2, dtype=float))
             self.start_note = ("started without the IMU quaternion: roll and pitch from the "
                                "accelerometer, yaw 0")
