@@ -97,6 +97,10 @@ class Episode:
         start_pose: The pose the robot starts in (:data:`START_POSES`).
         settle_s: Sim time [s] the robot stands before the goal is sent (the plant spawns
             without contact forces; its feet settle in the first 20 ms).
+        calibrate_s: Sim time [s] of a standing calibration after the settle, before the
+            goal (0: none): the foot sensors' offset and gain learnt while the centre of
+            mass circles, the IMU checked at rest
+            (:class:`actions.robot.foot_calibration.StandingCalibration`).
         pushes: Pushes on the robot, their ``at_s`` on the simulated clock [s].
         cancel_at_s: Sim time [s] at which the goal is canceled (``None``: never).
         timeout_s: Sim time [s] after the goal is sent at which it is canceled if it has not
@@ -123,6 +127,7 @@ class Episode:
     controller_params: Params = ()
     start_pose: str = "standing"
     settle_s: float = 0.3
+    calibrate_s: float = 0.0
     pushes: tuple[Push, ...] = ()
     cancel_at_s: float | None = None
     timeout_s: float | None = None
@@ -165,6 +170,15 @@ class Episode:
                 control_period_s=self.control_period_s, **dict(self.controller_params)))
         _checked("start_pose", lambda: check_name("start pose", self.start_pose, START_POSES))
         _checked("settle_s", lambda: as_float("settle_s", self.settle_s, low=0.0, high=3600.0))
+        _checked("calibrate_s", lambda: as_float("calibrate_s", self.calibrate_s, low=0.0,
+                                                 high=60.0))
+        if self.calibrate_s and self.state != "estimate":
+            raise EpisodeError("calibrate_s", f"calibrates the sensors the estimator reads: "
+                                              f"expected state 'estimate', received "
+                                              f"{self.state!r}")
+        if 0.0 < self.calibrate_s < 0.2:
+            raise EpisodeError("calibrate_s", f"expected 0 (none) or at least 0.2 s, received "
+                                              f"{self.calibrate_s:g}")
         set_(self, "pushes", _items("pushes", self.pushes, Push))
         if self.cancel_at_s is not None:
             _checked("cancel_at_s", lambda: as_float("cancel_at_s", self.cancel_at_s, low=0.0))

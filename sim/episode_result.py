@@ -99,6 +99,10 @@ class EpisodeListener:
     def event(self, event: EpisodeEvent) -> None:
         """A cancel requested (``cancel_requested``, ``timeout``, ``interrupted``) or a push."""
 
+    def calibrated(self, report: Any) -> None:
+        """The standing calibration ended (its
+        :class:`actions.robot.foot_calibration.CalibrationReport`), before the goal."""
+
     def cancel_reply(self, response: Any, now_s: float) -> None:
         """The server's reply to a cancel request (``accepted``, ``message``)."""
 
@@ -108,6 +112,11 @@ class EpisodeListener:
     def viewer_closed(self, view: Any, *, unpaced: bool) -> None:
         """The viewer's window went mid-run (``view``, a :class:`sim.viewer.ViewerHook`;
         ``unpaced``: the pacing stopped with it)."""
+
+    def loop_state(self, text: str, now_s: float) -> None:
+        """What the loop says of its state before the goal is sent, at sim time ``now_s``
+        [s]: why it is not controlling yet (and then that it is), or how the estimator
+        started."""
 
 
 @dataclass
@@ -134,6 +143,8 @@ class EpisodeResult:
         cpu_s: The process's CPU time [s] over the same span.
         overhead_s: Wall time [s] of it spent measuring, recording, rendering, in the viewer
             and sleeping: left out of the metrics' real-time factor.
+        calibration: The standing calibration's report
+            (:class:`actions.robot.foot_calibration.CalibrationReport`; ``None`` without one).
     """
 
     status: str
@@ -151,6 +162,7 @@ class EpisodeResult:
     wall_s: float = 0.0
     cpu_s: float = 0.0
     overhead_s: float = 0.0
+    calibration: Any = None
 
     @property
     def message(self) -> str:

@@ -177,6 +177,11 @@ class EpisodeRunner:
         """
         loop, episode, result = self.loop, self.episode, self._result
         loop.spin_for(episode.settle_s)
+        if episode.calibrate_s:
+            from actions.robot.foot_calibration import calibrate_standing
+
+            result.calibration = calibrate_standing(loop, duration_s=episode.calibrate_s)
+            self.listener.calibrated(result.calibration)
         result.sent_s = loop.robot.time_s
         if episode.action is not None and episode.action not in loop.runner.server_names:
             result.status = UNAVAILABLE
@@ -211,6 +216,7 @@ class EpisodeRunner:
     def _send_and_spin(self, tick: Callable[[], object]) -> None:
         loop, episode, result = self.loop, self.episode, self._result
         robot = loop.robot
+        self._wait_until_ready(tick)
         self.listener.goal_sending(self, robot.time_s)
         sent = robot.time_s
         self._clocks = (time.perf_counter(), time.process_time())  # what the listener took aside
@@ -248,6 +254,26 @@ class EpisodeRunner:
                                              {"status": wrapped.status.name}))
         elif not result.interrupted:
             result.status = NO_RESULT
+
+    def _wait_until_ready(self, tick: Callable[[], object]) -> None:
+        """A loop that is not controlling yet (no trustworthy sample at start, or standing up
+        after one): the listener is told why, and the goal waits for it, up to the goal's
+        timeout (then it is sent anyway and refused with the reason)."""
+        loop = self.loop
+        estimator = loop.estimator
+        if estimator is not None and estimator.start_note:
+            self.listener.loop_state(f"state estimator: {estimator.start_note}",
+                                     loop.robot.time_s)
+        if loop.ready:
+            return
+        self.listener.loop_state(f"not controlling: {loop.fallback.log.reason}; the motors "
+                                 "damp until it can", loop.robot.time_s)
+        end = loop.robot.time_s + self.episode.goal_timeout_s - 1e-9
+        while not loop.ready and loop.robot.time_s < end:
+            tick()
+        if loop.ready:
+            self.listener.loop_state(f"controlling ({loop.fallback.log.summary()})",
+                                     loop.robot.time_s)
 
     def _stand(self, tick: Callable[[], object]) -> None:
         """No goal: ``after_s`` of standing, a ``tick`` a control period."""

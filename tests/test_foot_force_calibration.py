@@ -150,3 +150,15 @@ def test_weight_shift_fit_refuses_swapped_feet_and_still_loads():
                                                  r"\(4, 2\)"):
         swapped.add(np.ones(4), np.ones((2, 4)), np.zeros(2))
     assert LEGS == ("FL", "FR", "RL", "RR")
+
+
+def test_an_episode_calibrates_only_what_it_estimates():
+    from sim.episode import Episode, EpisodeError
+
+    with pytest.raises(EpisodeError, match=r"calibrate_s: calibrates the sensors the estimator "
+                                           r"reads: expected state 'estimate', received 'truth'"):
+        Episode(state="truth", calibrate_s=2.0)
+    with pytest.raises(EpisodeError, match=r"calibrate_s: expected 0 \(none\) or at least 0.2 s, "
+                                           r"received 0.1"):
+        Episode(calibrate_s=0.1)
+    assert Episode(calibrate_s=2.0).calibrate_s == 2.0

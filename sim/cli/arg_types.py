@@ -169,7 +169,9 @@ def estimator_param(text: str) -> tuple[str, Any]:
     if not sep:
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE, received {text!r}")
     words = {"true": True, "yes": True, "false": False, "no": False}
-    value = words.get(value_text.strip().lower(), _number_or_text(value_text))
+    value: Any = words.get(value_text.strip().lower(), _number_or_text(value_text))
+    if "," in value_text:  # one number per foot (FL,FR,RL,RR)
+        value = tuple(_number_or_text(part) for part in value_text.split(","))
     return name, value
 
 

@@ -15,7 +15,8 @@ from sim.video_recorder import choose_offscreen_gl
 #: The option that sets each episode field, where the two names differ.
 _OPTIONS = {"plant": "--plant-param", "plant_params": "--plant-param",
             "sensors": "--sensor-param", "sensor_params": "--sensor-param",
-            "estimator_params": "--estimator-param", "command_delay_s": "--command-delay"}
+            "estimator_params": "--estimator-param", "command_delay_s": "--command-delay",
+            "calibrate_s": "--calibrate"}
 
 
 def check_options(args: argparse.Namespace) -> None:
@@ -67,7 +68,8 @@ def _episode(args: argparse.Namespace) -> Episode:
         fields.update(sensors=args.sensors, sensor_params=args.sensor_param,
                       sensor_seed=args.sensor_seed, state=args.state, estimator=args.estimator,
                       estimator_params=args.estimator_param,
-                      sensor_faults=tuple(args.sensor_fault), command_delay_s=args.command_delay)
+                      sensor_faults=tuple(args.sensor_fault), command_delay_s=args.command_delay,
+                      calibrate_s=args.calibrate or 0.0)
     try:
         return Episode(**fields)
     except EpisodeError as err:

@@ -60,6 +60,8 @@ class GoalRun(EpisodeListener):
         episode = goal_episode(args, self.action_name, self.goal)
         self.say(state_line(episode))
         self.say(plant_line(episode))
+        if episode.state == "estimate":
+            self.say("feet: " + episode.make_estimator().foot_calibration.describe())
         runner = self.runner = EpisodeRunner(
             episode, listener=self, metrics=args.metrics or args.report is not None,
             record=bool(args.log or args.plot), video=args.video, video_fps=args.fps,
@@ -117,6 +119,11 @@ class GoalRun(EpisodeListener):
     def goal_sending(self, runner: EpisodeRunner, now_s: float) -> None:
         self.say(f"[{now_s:7.3f} s] {self.action_name}: sending goal ({self.goal_text})")
 
+    def calibrated(self, report: Any) -> None:
+        now_s = self.runner.loop.robot.time_s
+        for line in report.describe().splitlines():
+            self.say(f"[{now_s:7.3f} s] {line}")
+
     def goal_response(self, handle: ClientGoalHandle, now_s: float) -> None:
         if handle.accepted:
             self.say(f"[{now_s:7.3f} s] goal accepted")
@@ -146,6 +153,9 @@ class GoalRun(EpisodeListener):
 
     def viewer_unavailable(self, reason: str) -> None:
         print(f"go2-wbc: --viewer: {reason}; running headless", file=sys.stderr)
+
+    def loop_state(self, text: str, now_s: float) -> None:
+        self.say(f"[{now_s:7.3f} s] {text}")
 
     def viewer_closed(self, view: ViewerHook, *, unpaced: bool) -> None:
         how = ("was closed" if view.error is None else
@@ -199,6 +209,10 @@ class GoalRun(EpisodeListener):
                                      else dataclasses.asdict(estimator.config)),
                 "command_delay_s": episode.command_delay_s,
                 "sensor_faults": [dataclasses.asdict(f) for f in episode.sensor_faults],
+                "foot_calibration": (None if estimator is None
+                                     else dataclasses.asdict(estimator.foot_calibration)),
+                "calibration": (None if result.calibration is None
+                                else result.calibration.as_dict()),
             },
             "control_rate_hz": self.args.control_rate,
             "physics_timestep_s": episode.timestep_s,
@@ -206,6 +220,7 @@ class GoalRun(EpisodeListener):
             "phases": [{"phase": phase, "t_s": round(t_s, 4)} for t_s, phase in result.phases()],
             "events": [e.as_dict() for e in result.events],
             "feedback": feedback,
+            "loop_modes": [t.as_dict() for t in runner.loop.fallback.log.transitions],
             "metrics": None if result.metrics is None else result.metrics.as_dict(),
             "wall_time_s": round(result.wall_s, 3),
         }

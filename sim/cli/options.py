@@ -81,7 +81,15 @@ def add_state_options(group: Any) -> None:
                        + f" (default: {estimator}; see the README's State estimation)")
     _add_params(group, "estimator", estimator_param, "estimator", (
         "use_foot_force=false (contact from the schedule alone: a robot without foot sensors), "
-        "trust_timeout_s, foot_force_on, foot_force_off, ..."))
+        "trust_timeout_s, foot_force_offset and foot_force_gain (the foot sensors' counts = "
+        "offset + gain x N: one number or four, FL,FR,RL,RR), foot_force_on_n, "
+        "foot_force_off_n, ..."))
+    group.add_argument("--calibrate", type=float_in(0.2, 60.0, what="a duration", unit="s",
+                                                    fmt="g"),
+                       default=episode_default("calibrate_s") or None, metavar="SECONDS",
+                       help="before the goal, stand SECONDS (2 is enough) with the centre of "
+                            "mass circling 4.5 cm: learn each foot sensor's offset and gain "
+                            "and check the IMU at rest (default: no calibration)")
     sensors = episode_default("sensors")
     group.add_argument("--sensors", choices=tuple(SENSOR_PRESETS), default=sensors,
                        help=f"what the simulated GO2 measures (default: {sensors}: its "
