@@ -16,7 +16,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 USER_SCRIPT = ROOT / "tests" / "data" / "typed_user_script.py"
 #: The packages whose ``__all__`` a user imports from.
-PUBLIC_PACKAGES = ("wbc", "wbc.backends", "tasks", "actions")
+PUBLIC_PACKAGES = ("wbc", "wbc.backends", "tasks", "actions", "actions.robot")
 REVEALED = re.compile(r'^(?P<path>.+?):(?P<line>\d+): note: Revealed type is "(?P<type>.*)"$')
 EXPECT = re.compile(r"#\s*expect:\s*(?P<text>.+?)\s*$")
 

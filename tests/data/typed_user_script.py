@@ -10,9 +10,11 @@ from typing import reveal_type
 
 import numpy as np
 
-from actions import GoalStatus, HighFiveGoal
+from actions import ControlLoop as RobotLoop
+from actions import GoalStatus, HighFiveGoal, RobotInterface
 from sim.control_loop import ControlLoop
 from wbc import (
+    UNITREE_SDK_ORDERS,
     ControllerConfig,
     ControlOutput,
     Go2Description,
@@ -46,3 +48,8 @@ reveal_type(InvariantEkf)  # expect: -> wbc.estimation.invariant_ekf.InvariantEk
 reveal_type(make_estimator)  # expect: -> wbc.estimation.state_estimator.EstimatorBase
 reveal_type(SensorRecord)  # expect: -> wbc.robot_io.sensor_record.SensorRecord
 reveal_type(available_backends())  # expect: list[str]
+reveal_type(RobotLoop)  # expect: -> actions.robot.control_loop.ControlLoop
+reveal_type(loop.robot.robot_orders)  # expect: wbc.model.orders.Orders
+robot: RobotInterface = loop.robot.robot
+reveal_type(SensorRecord.zeros(UNITREE_SDK_ORDERS).orders)  # expect: wbc.model.orders.Orders
+SensorRecord.zeros("sdk")  # type: ignore[arg-type]
