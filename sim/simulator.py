@@ -17,6 +17,7 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector, check_name
 from wbc.model.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 from wbc.model.joint_map import JointMap
+from wbc.model.orders import DESCRIPTION_ORDERS
 from wbc.robot_io.motor_command import MotorCommand
 
 _VECTOR = numba.float64[:]
@@ -235,7 +236,14 @@ class Go2Simulator:
 
         The drivers apply ``tau_ff + kp (q_des - q) + kd (dq_des - dq)``, clipped at the
         effort limits, at every one of the ``n_steps`` physics steps.
+
+        Raises:
+            OrderMismatchError: ``command`` in another joint order (``command.orders``).
         """
+        if command.orders is not DESCRIPTION_ORDERS:
+            command.orders.check(DESCRIPTION_ORDERS, what="Go2Simulator.step_command(command)",
+                                 legs=False, fix="a command in the plant's actuator order goes "
+                                 "to step_actuator_command")
         self.step_actuator_command(command.reordered(self.actuator_map.index), n_steps)
 
     def step_actuator_command(self, command: MotorCommand, n_steps: int = 1) -> None:

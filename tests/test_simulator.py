@@ -9,7 +9,12 @@ from sim.simulator import Go2Simulator
 from tests.conftest import random_configuration
 from wbc.controller.joint_pd_controller import JointPdController
 from wbc.core.conventions import mujoco_to_pin
-from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
+from wbc.core.errors import (
+    ConfigurationError,
+    NonFiniteError,
+    OrderMismatchError,
+    UnknownNameError,
+)
 from wbc.model.description import FOOT_FRAMES, JOINT_NAMES, LEGS, UNITREE_SDK_JOINT_NAMES
 from wbc.model.joint_map import JointMap
 from wbc.robot_io.motor_command import MotorCommand
@@ -213,3 +218,18 @@ def test_foot_arrays_are_the_dicts_in_leg_order(sim, description):
     assert sim.foot_sliding_velocity_array(out) is out
     np.testing.assert_array_equal(out, [sliding[leg] for leg in LEGS])
     assert min(f[2] for f in forces.values()) > 5.0
+
+
+def test_step_command_takes_the_descriptions_order_only():
+    sim = Go2Simulator(actuator_order=UNITREE_SDK_JOINT_NAMES)
+    tau = np.arange(12.0) - 6.0
+    sim.step_command(MotorCommand.pure_torque(tau))
+    fr_hip = UNITREE_SDK_JOINT_NAMES.index("FR_hip_joint")
+    assert sim.data.ctrl[fr_hip] == tau[JOINT_NAMES.index("FR_hip_joint")]  # by name
+    in_plant_order = MotorCommand.pure_torque(tau).reordered(sim.actuator_map.index)
+    with pytest.raises(OrderMismatchError) as error:
+        sim.step_command(in_plant_order)
+    assert str(error.value) == (
+        "Go2Simulator.step_command(command): in the Unitree SDK's joint order (by leg FR, FL, "
+        "RR, RL), expected the description's joint order (by leg FL, FR, RL, RR): a command in "
+        "the plant's actuator order goes to step_actuator_command")
