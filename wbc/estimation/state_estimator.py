@@ -52,6 +52,7 @@ from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.estimation.estimator_config import EstimatorConfig, SensorTrustConfig
+from wbc.estimation.estimator_start import level_quaternion, start_problem
 from wbc.estimation.foot_force_calibration import FootForceCalibration
 from wbc.estimation.shared_kernels import (
     CAL_ACTIVE,
@@ -75,21 +76,9 @@ from wbc.model.description import Go2Description
 from wbc.model.leg_kinematics import LegKinematics
 from wbc.robot_io.sensor_record import SensorRecord, check_description_orders
 
-#: Gravity [m/s^2] an accelerometer at rest reads.
-_GRAVITY = 9.81
 #: ``clock``'s entry of the time without a trusted sample (see
 #: :func:`wbc.estimation.shared_kernels.check_sample`).
 _UNTRUSTED_S = 2
-
-
-def _level_quaternion(accel: np.ndarray) -> np.ndarray:
-    """The attitude (w, x, y, z), yaw 0, whose gravity the accelerometer ``accel`` [m/s^2]
-    reads at rest: it measures the specific force, ``R^T (0, 0, g)`` in the body frame."""
-    ax, ay, az = accel / np.linalg.norm(accel)
-    roll = np.arctan2(ay, az)
-    pitch = np.arctan2(-ax, np.hypot(ay, az))
-    cr, sr, cp, sp = np.cos(roll / 2), np.sin(roll / 2), np.cos(pitch / 2), np.sin(pitch / 2)
-    return np.array([cr * cp, sr * cp, cr * sp, -sr * sp])  # R = Ry(pitch) Rx(roll)
 
 
 class EstimatorBase:
@@ -178,34 +167,10 @@ class EstimatorBase:
     # -- start ---------------------------------------------------------------------------
 
     def start_problem(self, record: SensorRecord | None) -> str:
-        """Why ``record`` cannot start the estimator ('' when it can), the field named.
-
-        A start needs finite joint angles and velocities, a finite gyroscope, and the
-        attitude: a unit IMU quaternion or, where the estimator does not need one
-        (:attr:`needs_quaternion_to_start`), a finite accelerometer reading gravity.
-        """
-        if record is None:
-            return "no sensor sample"
-        if not isinstance(record, SensorRecord):
-            return f"record: expected a SensorRecord, received {type(record).__name__}"
-        for name in ("q", "dq", "gyroscope_rad_s"):
-            values = np.asarray(getattr(record, name), dtype=float)
-            if not np.isfinite(values).all():
-                return f"{name}: non-finite reading {values.tolist()}"
-        quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
-        norm = float(np.linalg.norm(quat))
-        if abs(norm - 1.0) <= self.config.quaternion_tolerance:
-            return ""
-        why = (f"imu_quaternion_wxyz: expected a unit quaternion (w, x, y, z), received "
-               f"{quat.tolist()} (norm {norm:g})")
-        if self.needs_quaternion_to_start:
-            return why
-        accel = np.asarray(record.accelerometer_m_s2, dtype=float)
-        gravity = float(np.linalg.norm(accel))
-        if not np.isfinite(accel).all() or not 0.5 * _GRAVITY < gravity < 1.5 * _GRAVITY:
-            return (f"{why}, and accelerometer_m_s2: expected gravity's {_GRAVITY:g} m/s^2 at "
-                    f"rest to take roll and pitch from, received {accel.tolist()}")
-        return ""
+        """Why ``record`` cannot start the estimator ('' when it can), the field named
+        (:func:`~wbc.estimation.estimator_start.start_problem`)."""
+        return start_problem(record, quaternion_tolerance=self.config.quaternion_tolerance,
+                             needs_quaternion=self.needs_quaternion_to_start)
 
     def reset(self, record: SensorRecord, *, base_xy: tuple[float, float] = (0.0, 0.0),
               keep_yaw: bool = False) -> StateEstimate:
@@ -230,7 +195,7 @@ class EstimatorBase:
         quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
         self.start_note = ""
         if not abs(float(np.linalg.norm(quat)) - 1.0) <= self.config.quaternion_tolerance:
-            quat = _level_quaternion(np.asarray(record.accelerometer_m_s2, dtype=float))
+            quat = level_quaternion(np.asarray(record.accelerometer_m_s2, dtype=float))
             self.start_note = ("started without the IMU quaternion: roll and pitch from the "
                                "accelerometer, yaw 0")
         joint_q = np.asarray(record.q, dtype=float)
