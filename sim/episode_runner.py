@@ -176,6 +176,7 @@ class EpisodeRunner:
             RenderingUnavailableError: A video was asked for and cannot be rendered here.
         """
         loop, episode, result = self.loop, self.episode, self._result
+        self._wait_until_ready()
         loop.spin_for(episode.settle_s)
         if episode.calibrate_s:
             from actions.robot.foot_calibration import calibrate_standing
@@ -216,7 +217,6 @@ class EpisodeRunner:
     def _send_and_spin(self, tick: Callable[[], object]) -> None:
         loop, episode, result = self.loop, self.episode, self._result
         robot = loop.robot
-        self._wait_until_ready(tick)
         self.listener.goal_sending(self, robot.time_s)
         sent = robot.time_s
         self._clocks = (time.perf_counter(), time.process_time())  # what the listener took aside
@@ -255,7 +255,7 @@ class EpisodeRunner:
         elif not result.interrupted:
             result.status = NO_RESULT
 
-    def _wait_until_ready(self, tick: Callable[[], object]) -> None:
+    def _wait_until_ready(self) -> None:
         """A loop that is not controlling yet (no trustworthy sample at start, or standing up
         after one): the listener is told why, and the goal waits for it, up to the goal's
         timeout (then it is sent anyway and refused with the reason)."""
@@ -270,7 +270,7 @@ class EpisodeRunner:
                                  "damp until it can", loop.robot.time_s)
         end = loop.robot.time_s + self.episode.goal_timeout_s - 1e-9
         while not loop.ready and loop.robot.time_s < end:
-            tick()
+            loop.spin_once()
         if loop.ready:
             self.listener.loop_state(f"controlling ({loop.fallback.log.summary()})",
                                      loop.robot.time_s)

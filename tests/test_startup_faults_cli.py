@@ -1,0 +1,39 @@
+"""``go2-wbc high-five`` with a sensor fault from t = 0 that leaves the estimator nothing to
+start from (no sample, a NaN joint): one line says why the loop waits, the motors damp, the
+estimator starts on the first usable sample, the robot is stood up, and the high five
+SUCCEEDS (exit 0) with the report written. No traceback."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from sim.cli import main
+from sim.cli.exit_codes import EXIT_SUCCEEDED
+
+
+def run_cli(tmp_path, capsys, fault: str) -> tuple[int, list[str], dict]:
+    report = tmp_path / "report.json"
+    code = main(["high-five", "--sensor-fault", fault, "--hold", "0", "--report", str(report)])
+    lines = capsys.readouterr().out.splitlines()
+    return code, lines, json.loads(report.read_text())
+
+
+@pytest.mark.parametrize(("fault", "why"), [
+    ("dropout,0,1", "no sensor sample"),
+    ("joint_nan,0,1", "q: non-finite reading at FR_thigh_joint"),
+])
+def test_a_fault_from_the_start_waits_then_the_high_five_succeeds(tmp_path, capsys, fault, why):
+    code, lines, report = run_cli(tmp_path, capsys, fault)
+    assert code == EXIT_SUCCEEDED
+    waiting = [line for line in lines if "not controlling" in line]
+    assert waiting == [(f"[  0.000 s] not controlling: waiting for a sensor sample to start the "
+                       f"state estimator from: {why}; the motors damp until it can")]
+    assert report["result"]["status"] == "SUCCEEDED"
+    modes = [(mode["mode"], mode["t_s"]) for mode in report["loop_modes"]]
+    # Waiting for the fault's 1 s, then the stand (2 s), then control.
+    assert modes == [("WAITING", 0.0), ("RECOVERING", 1.0), ("CONTROLLING", pytest.approx(3.0,
+                                                                                         abs=0.01))]
+    metrics = report["metrics"]
+    assert metrics["max_base_tilt_deg"] < 1.0 and metrics["raised_foot_rms_mm"] < 5.0
