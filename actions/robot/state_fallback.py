@@ -110,7 +110,8 @@ def decaying_damping(tau_held: np.ndarray, dq: np.ndarray, elapsed_s: float, *,
     their encoders.
     """
     n = len(tau_held)
-    share = 0.0 if decay_s <= 0.0 else max(0.0, 1.0 - elapsed_s / decay_s)
+    # (A tolerance for sums of periods: a hundred 1 ms ticks are 0.1 s, not 0.0999999.)
+    share = 0.0 if elapsed_s >= decay_s - 1e-9 else 1.0 - elapsed_s / decay_s
     tau_ff = np.clip(share * np.asarray(tau_held, dtype=float), -tau_max, tau_max)
     velocity = np.asarray(dq, dtype=float)
     velocity = np.where(np.isfinite(velocity), velocity, 0.0)
