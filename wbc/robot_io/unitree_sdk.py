@@ -7,7 +7,10 @@ read and set its attributes. This module names the fields, orders and constants;
 are :class:`wbc.robot_io.sdk_motor_command.SdkMotorCommand` and
 :class:`wbc.robot_io.sdk_low_state.SdkLowState` (with :func:`sensor_record_from_message`).
 
-Joint orders (always mapped by name through :meth:`wbc.model.joint_map.JointMap.unitree_sdk`):
+Joint orders (always mapped by name through :meth:`wbc.model.joint_map.JointMap.unitree_sdk`;
+``SdkLowState.orders`` and ``SdkMotorCommand.orders`` are
+:data:`~wbc.model.orders.UNITREE_SDK_ORDERS`, and the records and commands they convert to
+carry :data:`~wbc.model.orders.DESCRIPTION_ORDERS`, checked where they are used):
 
 - SDK order, the motor slots 0 to 11 of both messages (legs FR, FL, RR, RL):
   ``FR_hip_joint, FR_thigh_joint, FR_calf_joint, FL_hip_joint, FL_thigh_joint,
