@@ -138,3 +138,17 @@ def test_a_stop_without_trustworthy_state_damps_and_says_the_robot_is_not_at_res
     assert rest.notes == [
         ("sit refused (waiting for a sensor sample to start the state estimator from: no "
         "sensor sample)"), "damping (not at rest: the robot could not be sat down)"]
+
+
+def test_a_sit_that_ends_aborted_is_named_and_the_robot_is_not_said_to_be_at_rest():
+    loop = ControlLoop.simulated(sensor_faults=[SensorFault("stale", 0.3, 1.0)])
+    rest = RestSequence(loop)
+    rest.request_stop("test")
+    while rest.step(loop.robot.time_s) < Phase.DAMPING:
+        assert loop.robot.time_s < 0.4
+        loop.spin_once()
+    sat, damped = rest.notes
+    assert sat.startswith("sit ended ABORTED: the state stopped being trustworthy (state "
+                          "estimate: no trustworthy sensor sample for 11 ms (limit 10 ms): "
+                          "stale sample (tick ")
+    assert damped.startswith("damping (not at rest: base at 0.")
