@@ -272,8 +272,12 @@ def test_bad_configuration_names_the_field():
         estimator.update(record(pose(), tick=1), LOADED)
     broken = record(pose(), tick=0)
     broken.imu_quaternion_wxyz[:] = [2.0, 0.0, 0.0, 0.0]
-    with pytest.raises(ConfigurationError, match=r"^imu_quaternion_wxyz: expected a unit "
-                                                 r"quaternion \(w, x, y, z\) to start from"):
+    broken.accelerometer_m_s2[:] = np.nan  # nor gravity to take roll and pitch from
+    with pytest.raises(ConfigurationError, match=r"^cannot start the state estimator: "
+                                                 r"imu_quaternion_wxyz: expected a unit "
+                                                 r"quaternion \(w, x, y, z\), received "
+                                                 r"\[2.0, 0.0, 0.0, 0.0\] \(norm 2\), and "
+                                                 r"accelerometer_m_s2: expected gravity's"):
         estimator.reset(broken)
     estimator.reset(record(pose(), tick=0))
     with pytest.raises(ConfigurationError, match=r"^normal_force_bounds: expected 4 numbers"):

@@ -278,13 +278,15 @@ def test_bad_input_gets_one_clear_error():
         estimator.update(record(pose(), tick=1), LOADED)
     broken = record(pose(), tick=0)
     broken.imu_quaternion_wxyz[:] = [2.0, 0.0, 0.0, 0.0]
-    with pytest.raises(ConfigurationError, match=r"^imu_quaternion_wxyz: expected a unit "
-                                                 r"quaternion \(w, x, y, z\) to start from, "
-                                                 r"received \[2.0, 0.0, 0.0, 0.0\]"):
+    with pytest.raises(ConfigurationError, match=r"^cannot start the state estimator: "
+                                                 r"imu_quaternion_wxyz: expected a unit "
+                                                 r"quaternion \(w, x, y, z\), received "
+                                                 r"\[2.0, 0.0, 0.0, 0.0\] \(norm 2\)$"):
         estimator.reset(broken)
     broken = record(pose(), tick=0)
     broken.q[0] = np.nan
-    with pytest.raises(ConfigurationError, match=r"^q: non-finite value at index \[0\]"):
+    with pytest.raises(ConfigurationError, match=r"^cannot start the state estimator: q: "
+                                                 r"non-finite reading at FL_hip_joint$"):
         estimator.reset(broken)
     estimator.reset(record(pose(), tick=0))  # still usable after the refusals
     with pytest.raises(ConfigurationError, match=r"^normal_force_bounds: expected 4 numbers"):

@@ -48,6 +48,17 @@ def start_problem(record: SensorRecord | None, *, quaternion_tolerance: float,
     return ""
 
 
+def start_attitude(record: SensorRecord, quaternion_tolerance: float) -> tuple[np.ndarray, str]:
+    """The attitude (w, x, y, z) to start from and a note ('' when none): the IMU's unit
+    quaternion, or without one (not within ``quaternion_tolerance`` of norm 1), roll and
+    pitch from the accelerometer (:func:`level_quaternion`) and yaw 0."""
+    quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
+    if abs(float(np.linalg.norm(quat)) - 1.0) <= quaternion_tolerance:  # False for NaN
+        return quat, ""
+    return (level_quaternion(np.asarray(record.accelerometer_m_s2, dtype=float)),
+            "started without the IMU quaternion: roll and pitch from the accelerometer, yaw 0")
+
+
 def level_quaternion(accel: np.ndarray) -> np.ndarray:
     """The attitude (w, x, y, z), yaw 0, whose gravity the accelerometer ``accel`` [m/s^2]
     reads at rest: it measures the specific force, ``R^T (0, 0, g)`` in the body frame."""

@@ -52,7 +52,7 @@ from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.estimation.estimator_config import EstimatorConfig, SensorTrustConfig
-from wbc.estimation.estimator_start import level_quaternion, start_problem
+from wbc.estimation.estimator_start import start_attitude, start_problem
 from wbc.estimation.foot_force_calibration import FootForceCalibration
 from wbc.estimation.shared_kernels import (
     CAL_ACTIVE,
@@ -147,11 +147,9 @@ class EstimatorBase:
         self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
-        #: How often the estimator started again after its inputs were untrustworthy for
-        #: longer than ``trust_timeout_s`` (:meth:`update`).
+        #: Fresh starts after inputs untrustworthy for over ``trust_timeout_s`` (:meth:`update`).
         self.restarts = 0
-        #: What the last start had to do without ('' when nothing).
-        self.start_note = ""
+        self.start_note = ""  # what the last start did without ('' when nothing)
         self._lost_xy = (0.0, 0.0)  # the base's place [m] when trust was lost
 
     def _filter_arrays(self) -> tuple[np.ndarray, ...]:
@@ -167,8 +165,7 @@ class EstimatorBase:
     # -- start ---------------------------------------------------------------------------
 
     def start_problem(self, record: SensorRecord | None) -> str:
-        """Why ``record`` cannot start the estimator ('' when it can), the field named
-        (:func:`~wbc.estimation.estimator_start.start_problem`)."""
+        """Why ``record`` cannot start the estimator ('' when it can): :func:`start_problem`."""
         return start_problem(record, quaternion_tolerance=self.config.quaternion_tolerance,
                              needs_quaternion=self.needs_quaternion_to_start)
 
@@ -177,9 +174,8 @@ class EstimatorBase:
         """Start from ``record`` on four loaded feet, at rest (description order).
 
         Args:
-            record: The first sample (:meth:`start_problem` says what it needs). Without a
-                unit quaternion (an estimator that does not need one), roll and pitch come
-                from the accelerometer, which reads gravity at rest, and the yaw is 0.
+            record: The first sample (:meth:`start_problem` says what it needs; without a
+                unit quaternion: :func:`start_attitude`).
             base_xy: Where the base is in the estimator's world [m] (the origin by default).
             keep_yaw: Keep the IMU's yaw; by default the estimator's world has the base's
                 heading at zero.
@@ -192,16 +188,10 @@ class EstimatorBase:
         problem = self.start_problem(record)
         if problem:
             raise ConfigurationError(f"cannot start the state estimator: {problem}")
-        quat = np.asarray(record.imu_quaternion_wxyz, dtype=float)
-        self.start_note = ""
-        if not abs(float(np.linalg.norm(quat)) - 1.0) <= self.config.quaternion_tolerance:
-            quat = level_quaternion(np.asarray(record.accelerometer_m_s2, dtype=float))
-            self.start_note = ("started without the IMU quaternion: roll and pitch from the "
-                               "accelerometer, yaw 0")
-        joint_q = np.asarray(record.q, dtype=float)
-        self.start_kernel(quat, joint_q, self._params, *self._leg_arrays(),
-                          *self._filter_arrays(), float(base_xy[0]), float(base_xy[1]),
-                          bool(keep_yaw), self._work)
+        quat, self.start_note = start_attitude(record, self.config.quaternion_tolerance)
+        self.start_kernel(quat, np.asarray(record.q, dtype=float), self._params,
+                          *self._leg_arrays(), *self._filter_arrays(), float(base_xy[0]),
+                          float(base_xy[1]), bool(keep_yaw), self._work)
         self._foot_contact[:] = 1.0
         self._foot_same_s[:] = 0.0
         self._foot_good_s[:] = 0.0
@@ -277,9 +267,8 @@ class EstimatorBase:
         if was_usable and not estimate.usable:
             self._lost_xy = (float(estimate.q[0]), float(estimate.q[1]))
         elif not was_usable and estimate.trusted and not self.start_problem(record):
-            # Back after longer than the trust limit: what was integrated across the gap
-            # (the last inputs, held) is discarded; start again from this sample where the
-            # base was when trust was lost (the yaw of a new world at 0, as at the start).
+            # Back after over the trust limit: drop what was integrated across the gap and
+            # start again from this sample where the base was (a new world's yaw at 0).
             self.restarts += 1
             return self.reset(record, base_xy=self._lost_xy)
         if flags != self._described:  # the text is built when what it says changes
