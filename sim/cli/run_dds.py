@@ -164,6 +164,8 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
                 "from the schedule only (estimator use_foot_force=false)")
         estimator = make_estimator(args.estimator, control_period_s=period_s,
                                    trust_timeout_s=stale_after_s, **params)
+        say("feet: " + estimator.foot_calibration.describe()
+            + ("" if estimator.config.use_foot_force else " (unused: use_foot_force=false)"))
         loop = ControlLoop(robot, WholeBodyController(control_period_s=period_s),
                            estimator=estimator)
         bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
