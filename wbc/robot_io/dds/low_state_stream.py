@@ -35,6 +35,7 @@ RATE_SAMPLES = 50
 #: seen at the start, floor and ceiling [s].
 STALE_PERIODS, STALE_GAP_FACTOR, STALE_MIN_S, STALE_MAX_S = 20.0, 2.0, 0.02, 0.25
 _TICK_WRAP = 1 << 32
+_NO_FEET = bytes(8)  # foot_force: four int16 zeros
 
 
 def default_stale_after_s(period_s: float, longest_gap_s: float = 0.0) -> float:
@@ -178,7 +179,7 @@ class LowStateStream:
         counters.new_samples += 1
         self._tick, self._content, self._new_s = tick, content, now_s
         self._since_new = [0, 0, 0]
-        if not self.foot_force_seen and record["foot_force"].any():
+        if not self.foot_force_seen and record["foot_force"].tobytes() != _NO_FEET:
             self.foot_force_seen = True
         if len(self._arrivals) < RATE_SAMPLES:
             self._arrivals.append(now_s)

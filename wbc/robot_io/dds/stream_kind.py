@@ -37,6 +37,7 @@ SENDERS = {
     UNITREE_PYTHON: "Unitree's Python simulator (unitree_mujoco simulate_python)",
 }
 _ZERO_HEAD = (0x00, 0x00)
+_HEAD_BYTES, _ZERO_HEAD_BYTES = bytes(HEAD), bytes(_ZERO_HEAD)
 
 
 def _head_text(head: tuple[int, ...]) -> str:
@@ -51,22 +52,22 @@ def framing_of(record: np.ndarray) -> tuple[str | None, str]:
         frame that fits none, the reason naming the field, what was received and what is
         valid.
     """
-    head = (int(record["head"][0]), int(record["head"][1]))
-    crc = int(record["crc"])
-    if head == HEAD:
+    head = record["head"].tobytes()  # bytes compare: ~5 times faster than by element
+    if head == _HEAD_BYTES:
         if crc_ok(record):
             return GO2, ""
-        return None, (f"LowState_.crc: 0x{crc:08X} does not match the content (a frame with "
-                      f"head FE EF carries a CRC)")
-    if head == _ZERO_HEAD:
+        return None, (f"LowState_.crc: 0x{int(record['crc']):08X} does not match the content "
+                      f"(a frame with head FE EF carries a CRC)")
+    if head == _ZERO_HEAD_BYTES:
+        crc = int(record["crc"])
+        if crc == 0:  # a valid CRC of 0 is one in 2^32: not worth the check's 4 us
+            return UNITREE_PYTHON, ""
         if crc_ok(record):
             return UNITREE_CPP, ""
-        if crc == 0:
-            return UNITREE_PYTHON, ""
         return None, (f"LowState_.crc: 0x{crc:08X} does not match the content (valid: the "
                       f"content's CRC, or 0 for a stream without one)")
     return None, (f"LowState_.head: expected FE EF (a GO2) or 00 00 (Unitree's simulators), "
-                  f"received {_head_text(head)}")
+                  f"received {_head_text(tuple(head))}")
 
 
 @dataclass(frozen=True)
