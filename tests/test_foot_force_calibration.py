@@ -162,3 +162,31 @@ def test_an_episode_calibrates_only_what_it_estimates():
                                            r"received 0.1"):
         Episode(calibrate_s=0.1)
     assert Episode(calibrate_s=2.0).calibrate_s == 2.0
+
+
+def test_invariant_ekf_takes_the_accelerometer_bias_and_tilt_measured_at_rest():
+    import pinocchio as pin
+
+    from tests.synthetic_records import LOADED, pose, record, started
+    from wbc.estimation.invariant_ekf import InvariantEkf
+
+    estimator = started(InvariantEkf)
+    up = np.array([0.02, -0.01, 1.0])
+    up /= np.linalg.norm(up)
+    turn = estimator.set_imu_at_rest([0.1, -0.05, 0.02], up)
+    assert math.degrees(turn) == pytest.approx(math.degrees(math.atan(math.hypot(0.02, 0.01))),
+                                               rel=1e-6)
+    np.testing.assert_allclose(estimator.accel_bias, [0.1, -0.05, 0.02])
+    assert estimator.covariance[26, 26] == pytest.approx(0.005 ** 2)
+    assert estimator.covariance[26, 0] == 0.0
+    estimate = estimator.update(record(pose(), tick=1), LOADED)
+    x, y, z, w = estimate.q[3:7]
+    rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
+    np.testing.assert_allclose(rotation.T @ [0.0, 0.0, 1.0], up, atol=2e-4)  # one tick later
+    with pytest.raises(ConfigurationError, match=r"^up_body: expected a direction, received "
+                                                 r"\[0.0, 0.0, 0.0\]"):
+        estimator.set_imu_at_rest(np.zeros(3), np.zeros(3))
+    with pytest.raises(ConfigurationError, match=r"^accel_bias_m_s2"):
+        estimator.set_imu_at_rest([1.0, 2.0], up)
+    with pytest.raises(ConfigurationError, match=r"call reset\(record\) first"):
+        InvariantEkf().set_imu_at_rest(np.zeros(3), up)

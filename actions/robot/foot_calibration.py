@@ -26,6 +26,7 @@ estimator's calibration and says why. :func:`calibrate_standing` runs it on a lo
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -39,6 +40,7 @@ from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.estimation.foot_force_calibration import FootForceCalibration, WeightShiftFit
+from wbc.estimation.invariant_ekf import InvariantEkf
 from wbc.estimation.state_estimator import EstimatorBase
 from wbc.robot_io.sensor_record import SensorRecord
 
@@ -55,11 +57,17 @@ class ImuAtRest:
         accel_bias_m_s2: The accelerometer's mean less gravity along the feet's "up" [m/s^2]
             (3,), body frame: its bias on a level floor (horizontal components: what reads
             as tilt).
+        up_body: The floor's "up" in the base frame from the feet (3,) at the end: the
+            base's true tilt on a level floor.
+        turn_deg: How far the estimator's orientation was turned to it [deg] (an estimator
+            that takes the bias: :meth:`wbc.InvariantEkf.set_imu_at_rest`; 0 otherwise).
     """
 
     gyro_bias_rad_s: np.ndarray
     gravity_m_s2: float
     accel_bias_m_s2: np.ndarray
+    up_body: np.ndarray
+    turn_deg: float = 0.0
 
     @property
     def tilt_from_bias_deg(self) -> float:
@@ -74,7 +82,9 @@ class ImuAtRest:
         return (f"IMU at rest: gyro bias ({g[0]:+.4f}, {g[1]:+.4f}, {g[2]:+.4f}) rad/s; gravity "
                 f"{self.gravity_m_s2:.3f} m/s^2 (scale {self.gravity_m_s2 / GRAVITY_M_S2:.4f}); "
                 f"accelerometer bias against the feet's level ({b[0]:+.3f}, {b[1]:+.3f}, "
-                f"{b[2]:+.3f}) m/s^2, reading as {self.tilt_from_bias_deg:.2f} deg of tilt")
+                f"{b[2]:+.3f}) m/s^2, reading as {self.tilt_from_bias_deg:.2f} deg of tilt"
+                + (f"; the estimate's tilt corrected by {self.turn_deg:.2f} deg"
+                   if self.turn_deg else ""))
 
 
 @dataclass(frozen=True)
@@ -107,7 +117,8 @@ class CalibrationReport:
                 "imu": {"gyro_bias_rad_s": imu.gyro_bias_rad_s.tolist(),
                         "gravity_m_s2": imu.gravity_m_s2,
                         "accel_bias_m_s2": imu.accel_bias_m_s2.tolist(),
-                        "tilt_from_bias_deg": imu.tilt_from_bias_deg},
+                        "tilt_from_bias_deg": imu.tilt_from_bias_deg,
+                        "turn_deg": imu.turn_deg},
                 "samples": self.samples}
 
     def describe(self) -> str:
@@ -126,13 +137,18 @@ class StandingCalibration:
         duration_s: How long [s] it sways and fits (one circle).
         radius_m: The centre of mass's circle's radius [m].
         skip_s: Time [s] at the start left out of the fit (the sway starting).
+        apply_imu: Give an estimator that learns the accelerometer's bias
+            (:class:`wbc.InvariantEkf`) the bias and the tilt measured against the feet.
     """
 
     def __init__(self, *, duration_s: float = 2.0, radius_m: float = 0.045,
-                 skip_s: float = 0.1):
+                 skip_s: float = 0.1, apply_imu: bool = True):
         self.duration_s = as_float("duration_s", duration_s, low=0.2, high=60.0)
         self.radius_m = as_float("radius_m", radius_m, low=0.0, high=0.06)
         self.skip_s = as_float("skip_s", skip_s, low=0.0, high=self.duration_s / 2)
+        if not isinstance(apply_imu, bool):
+            raise ConfigurationError(f"apply_imu: expected true or false, received {apply_imu!r}")
+        self.apply_imu = apply_imu
         self.fit: WeightShiftFit | None = None
         self.report: CalibrationReport | None = None
         self._start_s: float | None = None
@@ -143,6 +159,13 @@ class StandingCalibration:
         self._accel_norm = 0.0
         self._up = np.zeros(3)
         self._imu_samples = 0
+        # The feet in the base frame and the base's world velocity at the first and the last
+        # sample: how far the base turned and sped up over the window.
+        self._feet_first = np.zeros((4, 3))
+        self._feet_last = np.zeros((4, 3))
+        self._velocity_first = np.zeros(3)
+        self._velocity_last = np.zeros(3)
+        self._first_s = self._last_s = 0.0
 
     @property
     def done(self) -> bool:
@@ -196,15 +219,37 @@ class StandingCalibration:
         self._gyro += sample.gyroscope_rad_s
         self._accel += sample.accelerometer_m_s2
         self._accel_norm += float(np.linalg.norm(sample.accelerometer_m_s2))
-        self._up += _feet_up(estimator.legs.foot_position)
+        feet = estimator.legs.foot_position
+        self._up += _feet_up(feet)
+        q, v = estimator.estimate.q, estimator.estimate.v
+        velocity = _rotation(q[3:7]) @ v[:3]  # the base's, world frame [m/s]
+        if self._imu_samples == 0:
+            self._feet_first[:] = feet
+            self._velocity_first[:] = velocity
+            self._first_s = sample.stamp_s
+        self._feet_last[:] = feet
+        self._velocity_last[:] = velocity
+        self._last_s = sample.stamp_s
         self._imu_samples += 1
 
     def _finish(self, estimator: EstimatorBase) -> None:
         n = max(self._imu_samples, 1)
+        span = max(self._last_s - self._first_s, 1e-9)
         up = self._up / max(float(np.linalg.norm(self._up)), 1e-12)
-        accel = self._accel / n
-        imu = ImuAtRest(gyro_bias_rad_s=self._gyro / n, gravity_m_s2=self._accel_norm / n,
-                        accel_bias_m_s2=accel - GRAVITY_M_S2 * up)
+        # The window's mean specific force is gravity's plus the base's mean acceleration
+        # (its velocity's change over the window: the circle ends moving), and its mean
+        # angular velocity the turn between the first and the last sample, which the feet
+        # standing on the floor give (their base-frame positions turned the other way).
+        turned = _turn(self._feet_first, self._feet_last) / span
+        world_to_base = _rotation(estimator.estimate.q[3:7]).T
+        sped_up = world_to_base @ (self._velocity_last - self._velocity_first) / span
+        imu = ImuAtRest(gyro_bias_rad_s=self._gyro / n - turned,
+                        gravity_m_s2=self._accel_norm / n,
+                        accel_bias_m_s2=self._accel / n - sped_up - GRAVITY_M_S2 * up,
+                        up_body=_feet_up(self._feet_last))
+        if self.apply_imu and isinstance(estimator, InvariantEkf):
+            turn = estimator.set_imu_at_rest(imu.accel_bias_m_s2, imu.up_body)
+            imu = dataclasses.replace(imu, turn_deg=math.degrees(turn))
         fit = self.fit or WeightShiftFit(1.0)
         try:
             feet = fit.result(
@@ -218,6 +263,29 @@ class StandingCalibration:
         self.report = CalibrationReport(feet=feet, learnt=True, problem="",
                                         spread_n=fit.spread_n(), imu=imu,
                                         samples=fit.samples)
+
+
+def _rotation(quat_xyzw: np.ndarray) -> np.ndarray:
+    """The rotation matrix of a unit quaternion in Pinocchio's (x, y, z, w) order."""
+    x, y, z, w = quat_xyzw
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def _turn(feet_first: np.ndarray, feet_last: np.ndarray) -> np.ndarray:
+    """The base's rotation [rad] (rotation vector, base frame) from the first sample to the
+    last, from the feet's base-frame positions (4, 3) at both, the feet fixed on the floor:
+    ``first = R last`` about their centroids (Kabsch)."""
+    a = feet_first - feet_first.mean(axis=0)
+    b = feet_last - feet_last.mean(axis=0)
+    u, _, vt = np.linalg.svd(a.T @ b)
+    d = np.sign(np.linalg.det(u @ vt))
+    r = u @ np.diag([1.0, 1.0, d]) @ vt
+    angle = math.acos(max(-1.0, min(1.0, (np.trace(r) - 1.0) / 2.0)))
+    axis = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    scale = 0.5 if angle < 1e-9 else angle / (2.0 * math.sin(angle))
+    return scale * axis
 
 
 def _feet_up(feet_body: np.ndarray) -> np.ndarray:

@@ -46,12 +46,14 @@ with no allocation. Fault flags, contact fusion and outputs are the linear filte
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-from wbc.core.validation import known_fields_only
+from wbc.core.errors import ConfigurationError
+from wbc.core.validation import as_float, as_vector, known_fields_only
 from wbc.estimation.estimator_config import SensorTrustConfig
 from wbc.estimation.invariant_ekf_group import _ABIAS, _DIM, _FEET, _GBIAS, _QUAT, _X_SIZE
 from wbc.estimation.invariant_ekf_kernels import _WORK_SIZE, _estimate, _start
@@ -175,6 +177,54 @@ class InvariantEkf(EstimatorBase):
     def accel_bias(self) -> np.ndarray:
         """The learnt accelerometer bias [m/s^2] (a copy)."""
         return self._x[_ABIAS:_ABIAS + 3].copy()
+
+    def set_imu_at_rest(self, accel_bias_m_s2: np.ndarray, up_body: np.ndarray, *,
+                        bias_sigma_m_s2: float = 0.005) -> float:
+        """Take the accelerometer's bias and the base's tilt measured at rest on a level floor
+        (:class:`actions.robot.foot_calibration.StandingCalibration`): the filter cannot tell
+        a horizontal bias from a tilt, the feet's plane can.
+
+        The bias becomes ``accel_bias_m_s2`` [m/s^2] (base frame) with a prior of
+        ``bias_sigma_m_s2`` (its cross-covariances cleared), and the orientation turns, in
+        the base frame, so that its "up" is ``up_body`` (the floor's normal from the feet);
+        the yaw is kept.
+
+        Returns:
+            The turn [rad] the orientation took.
+
+        Raises:
+            ConfigurationError: Not started, or a bias or "up" that is not 3 finite numbers
+                (an "up" of zero length).
+        """
+        if not self.started:
+            raise ConfigurationError("InvariantEkf.set_imu_at_rest: call reset(record) first")
+        bias = as_vector("accel_bias_m_s2", accel_bias_m_s2, 3)
+        up = as_vector("up_body", up_body, 3)
+        sigma = as_float("bias_sigma_m_s2", bias_sigma_m_s2, low=0.0, high=10.0,
+                         low_inclusive=False)
+        norm = float(np.linalg.norm(up))
+        if norm < 1e-9:
+            raise ConfigurationError(f"up_body: expected a direction, received {up.tolist()}")
+        up = up / norm
+        x, cov = self._x, self._P
+        rows = slice(_DIM - 3, _DIM)  # the accelerometer bias' error
+        cov[rows, :] = 0.0
+        cov[:, rows] = 0.0
+        cov[rows, rows] = np.eye(3) * sigma ** 2
+        x[_ABIAS:_ABIAS + 3] = bias
+        w, qx, qy, qz = x[_QUAT:_QUAT + 4]
+        now_up = 2.0 * np.array([qx * qz - w * qy, qy * qz + w * qx, 0.5 - qx * qx - qy * qy])
+        axis = np.cross(up, now_up)  # turns the measured "up" onto the filter's: R <- R R_b
+        angle = math.atan2(float(np.linalg.norm(axis)), float(up @ now_up))
+        if angle > 1e-12:
+            half = 0.5 * angle
+            b = np.concatenate([[math.cos(half)], math.sin(half) * axis / np.linalg.norm(axis)])
+            a = x[_QUAT:_QUAT + 4].copy()
+            x[_QUAT:_QUAT + 4] = [a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+                                  a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+                                  a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+                                  a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]]
+        return angle
 
     @property
     def foot_positions(self) -> np.ndarray:
