@@ -48,6 +48,9 @@ MENAGERIE_LINE = (
     "plant menagerie (joints: damping 2 N m s/rad, friction loss 0.2 N m, armature 0.01 "
     "kg m^2; feet: friction 0.8, condim 6, elliptic cones, impratio 100); control 1000 Hz, "
     "physics 1 ms")
+#: The third line of a run on the estimate: the foot sensors' calibration in use.
+FEET_LINE = ("feet: foot force [counts] = offset + gain x N (default): FL 10 + 2.5/N, "
+             "FR 10 + 2.5/N, RL 10 + 2.5/N, RR 10 + 2.5/N")
 WAVE_YAML = """\
 joint_names: [FR_hip_joint, FR_thigh_joint, FR_calf_joint]
 points:
@@ -113,6 +116,7 @@ def test_high_five_succeeds_and_prints_each_phase_once_then_the_result(high_five
     lines = high_five["out"].splitlines()
     assert lines.pop(0) == STATE_LINE
     assert lines.pop(0) == MENAGERIE_LINE
+    assert lines.pop(0) == FEET_LINE
     assert lines[0] == (f"[{SETTLE_S:7.3f} s] high_five: sending goal "
                         "(target_height 0.40 m, hold 0 s)")
     assert lines[1] == f"[{SETTLE_S:7.3f} s] goal accepted"
@@ -570,8 +574,9 @@ def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
     assert lines[0].endswith("seed 0; fault: no sample arrives from 3.3 s for 20 ms")
     assert "gyro 0.01 rad/s" in lines[0]
     assert lines[1].endswith("; commands applied 2 ms late")
-    assert ("result: ABORTED: aborted: controller fault (state estimate: no trustworthy sensor "
-            "sample for 11 ms (limit 10 ms): no sensor sample this period)") in out
+    assert ("result: ABORTED: the state stopped being trustworthy (state estimate: no "
+            "trustworthy sensor sample for 11 ms (limit 10 ms): no sensor sample this period) "
+            "while the goal was EXECUTING") in out
     state = json.loads(report.read_text())["state"]
     assert state["sensor_faults"] == [{"kind": "dropout", "at_s": 3.3, "duration_s": 0.02,
                                        "name": ""}]
