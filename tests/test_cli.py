@@ -574,8 +574,9 @@ def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
     assert lines[0].endswith("seed 0; fault: no sample arrives from 3.3 s for 20 ms")
     assert "gyro 0.01 rad/s" in lines[0]
     assert lines[1].endswith("; commands applied 2 ms late")
-    assert ("result: ABORTED: aborted: controller fault (state estimate: no trustworthy sensor "
-            "sample for 11 ms (limit 10 ms): no sensor sample this period)") in out
+    assert ("result: ABORTED: the state stopped being trustworthy (state estimate: no "
+            "trustworthy sensor sample for 11 ms (limit 10 ms): no sensor sample this period) "
+            "while the goal was EXECUTING") in out
     state = json.loads(report.read_text())["state"]
     assert state["sensor_faults"] == [{"kind": "dropout", "at_s": 3.3, "duration_s": 0.02,
                                        "name": ""}]
