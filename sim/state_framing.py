@@ -57,7 +57,8 @@ class StateGaps:
     at each due state a gap starts with :data:`GAP_CHANCE`, lasting :data:`GAP_MIN_S` to
     :data:`GAP_MAX_S`; in half of them (its publishing thread late) no state is sent, in the
     other half (its physics thread late) the physics stands still and the same state is sent
-    again. Seeded: the same gaps every run.
+    again. A new state comes between two gaps (back to back they would make a longer one
+    than was measured). Seeded: the same gaps every run.
     """
 
     def __init__(self, seed: int) -> None:
@@ -74,8 +75,8 @@ class StateGaps:
         """At a due state at sim time ``now_s`` [s]: ``""`` (send a new one), ``"silent"``
         (send none) or ``"frozen"`` (send the last one again, the physics halted)."""
         if now_s >= self._until_s:
-            self.kind = ""
-            if self._rng.random() < GAP_CHANCE:
+            ended, self.kind = bool(self.kind), ""
+            if not ended and self._rng.random() < GAP_CHANCE:
                 self.gaps += 1
                 self._until_s = now_s + self._rng.uniform(GAP_MIN_S, GAP_MAX_S)
                 self.kind = "frozen" if self._rng.random() < 0.5 else "silent"
