@@ -1,17 +1,19 @@
 """Both estimators at start-up and after a gap: what a sample needs to start one (the field
-named), a start without the IMU's quaternion (roll and pitch from the accelerometer), and a
-fresh start from the first trustworthy sample after the inputs were untrustworthy for longer
-than the trust limit (instead of integrating across the gap)."""
+named), a start without the IMU's quaternion (roll and pitch from the accelerometer), a start
+with a foot in the air, and a fresh start from the first trustworthy sample after the inputs
+were untrustworthy for longer than the trust limit (instead of integrating across the gap)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from tests.synthetic_records import LOADED, expected_height, pose, record, run, started
 from wbc.core.errors import ConfigurationError
 from wbc.estimation.invariant_ekf import InvariantEkf
 from wbc.estimation.state_estimator import StateEstimator
+from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, LEGS, Go2Description
 
 ESTIMATORS = [InvariantEkf, StateEstimator]
 
@@ -83,3 +85,22 @@ def test_after_a_gap_longer_than_the_trust_limit_it_starts_again_from_the_fresh_
     estimate = run(estimator, lower, 200, first_tick=701)
     assert estimate.q[2] == pytest.approx(expected_height(lower), abs=1e-4)
     assert estimator.restarts == 1
+
+
+@pytest.mark.parametrize("kind", ESTIMATORS)
+def test_a_start_with_a_foot_in_the_air_puts_the_other_three_on_the_floor(kind):
+    q = pose()
+    raised = q.copy()
+    raised[7 + 4] += 0.4  # FR thigh back and calf folded: the FR foot 0.17 m off the floor
+    raised[7 + 5] -= 1.0
+    # Its foot sensor reads no load (the others about 40 N).
+    estimator = kind()
+    estimate = estimator.reset(record(raised, tick=0, feet=np.array([110.0, 0.0, 110.0, 110.0])))
+    model = Go2Description.default().model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, estimate.q)
+    heights = {leg: data.oMf[model.getFrameId(FOOT_FRAMES[leg])].translation[2]
+               for leg in LEGS}
+    assert heights["FR"] > FOOT_RADIUS_M + 0.1
+    for leg in ("FL", "RL", "RR"):
+        assert heights[leg] == pytest.approx(FOOT_RADIUS_M, abs=1e-6)

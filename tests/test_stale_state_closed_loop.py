@@ -42,6 +42,7 @@ class Run:
     base: list[np.ndarray] = field(default_factory=list)
     tilt: list[float] = field(default_factory=list)
     raised_foot_z: list[float] = field(default_factory=list)
+    estimated_z: list[float] = field(default_factory=list)
 
     def __call__(self, loop: ControlLoop, out) -> None:
         sim = loop.sim
@@ -55,6 +56,7 @@ class Run:
         self.base.append(q[:3].copy())
         self.tilt.append(tilt_deg(q))
         self.raised_foot_z.append(float(sim.foot_position_array()[RAISED, 2]))
+        self.estimated_z.append(float(loop.context.q[2]))
 
     def where(self, mode: LoopMode) -> np.ndarray:
         return np.array([m is mode for m in self.mode])
@@ -135,6 +137,12 @@ def test_the_robot_stays_where_it_was_and_lets_the_raised_foot_down(run):
 def test_fresh_state_stands_the_robot_up_and_a_new_high_five_succeeds(run):
     loop = run.loop
     assert loop.ready and loop.estimator.restarts == 1
+    # The estimator started again with the raised foot still in the air (0.34 m): on the
+    # other three feet, its height right (not a quarter of the foot's height low).
+    first = int(np.argmax(run.where(LoopMode.RECOVERING)))
+    assert run.raised_foot_z[first] > 0.3
+    error = np.abs(np.array(run.estimated_z) - np.array(run.base)[:, 2])[first:]
+    assert error.max() < 0.01
     assert standing_on_four_feet(loop) and run.tilt[-1] < 1.0
     recovering = run.where(LoopMode.RECOVERING)
     assert 1.9 < recovering.sum() * 1e-3 < 2.5  # the stand goal's 2 s

@@ -59,6 +59,20 @@ def start_attitude(record: SensorRecord, quaternion_tolerance: float) -> tuple[n
             "started without the IMU quaternion: roll and pitch from the accelerometer, yaw 0")
 
 
+#: Feet this close [m] to the lowest one stand on the floor at a start; higher ones are in the
+#: air (a leg left raised when the state was lost).
+FLOOR_BAND_M = 0.05
+
+
+def floor_shift(feet_z: np.ndarray, radius_m: float) -> float:
+    """How much [m] to raise a start whose four foot centres ``feet_z`` [m] average one foot
+    radius ``radius_m`` [m] above the floor, so that those standing on it (within
+    :data:`FLOOR_BAND_M` of the lowest) do instead: a foot left in the air (a high five's,
+    when the state was lost) does not lower the whole estimate by a quarter of its height."""
+    on_floor = feet_z <= feet_z.min() + FLOOR_BAND_M
+    return float(radius_m - feet_z[on_floor].mean())
+
+
 def level_quaternion(accel: np.ndarray) -> np.ndarray:
     """The attitude (w, x, y, z), yaw 0, whose gravity the accelerometer ``accel`` [m/s^2]
     reads at rest: it measures the specific force, ``R^T (0, 0, g)`` in the body frame."""

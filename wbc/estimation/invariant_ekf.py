@@ -55,7 +55,7 @@ import numpy as np
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector, known_fields_only
 from wbc.estimation.estimator_config import SensorTrustConfig
-from wbc.estimation.invariant_ekf_group import _ABIAS, _DIM, _FEET, _GBIAS, _QUAT, _X_SIZE
+from wbc.estimation.invariant_ekf_group import _ABIAS, _DIM, _FEET, _GBIAS, _POS, _QUAT, _X_SIZE
 from wbc.estimation.invariant_ekf_kernels import _WORK_SIZE, _estimate, _start
 from wbc.estimation.state_estimator import EstimatorBase
 from wbc.model.description import Go2Description
@@ -167,6 +167,10 @@ class InvariantEkf(EstimatorBase):
 
     def _filter_arrays(self) -> tuple[np.ndarray, ...]:
         return self._x, self._P
+
+    def _shift_height(self, dz: float) -> None:
+        self._x[_POS + 2] += dz  # the IMU's height and the feet's [m]
+        self._x[_FEET + 2:_FEET + 12:3] += dz
 
     @property
     def gyro_bias(self) -> np.ndarray:

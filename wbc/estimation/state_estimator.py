@@ -52,7 +52,7 @@ from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.estimation.estimator_config import EstimatorConfig, SensorTrustConfig
-from wbc.estimation.estimator_start import start_attitude, start_problem
+from wbc.estimation.estimator_start import floor_shift, start_attitude, start_problem
 from wbc.estimation.foot_force_calibration import FootForceCalibration
 from wbc.estimation.shared_kernels import (
     CAL_ACTIVE,
@@ -106,8 +106,7 @@ class EstimatorBase:
     quaternion_note: ClassVar[str] = "orientation from the gyroscope"
     #: The kernels' scratch space [floats].
     work_size: ClassVar[int] = 0
-    #: The estimator cannot start without the IMU's quaternion (its orientation follows the
-    #: IMU's attitude filter); one that can takes roll and pitch from the accelerometer.
+    #: It cannot start without the IMU's quaternion (else: roll, pitch from the accelerometer).
     needs_quaternion_to_start: ClassVar[bool] = False
 
     def __init__(self, config: SensorTrustConfig | None = None, *,
@@ -147,10 +146,9 @@ class EstimatorBase:
         self._described = 0  # the flags the estimate's ``faults`` text describes
         self._tick: Any = None
         self.started = False
-        #: Fresh starts after inputs untrustworthy for over ``trust_timeout_s`` (:meth:`update`).
-        self.restarts = 0
-        self.start_note = ""  # what the last start did without ('' when nothing)
-        self._lost_xy = (0.0, 0.0)  # the base's place [m] when trust was lost
+        #: Fresh starts after over ``trust_timeout_s`` untrusted (:meth:`update`); what the
+        #: last start did without ('' when nothing); the base's place [m] when trust was lost.
+        self.restarts, self.start_note, self._lost_xy = 0, "", (0.0, 0.0)
 
     def _filter_arrays(self) -> tuple[np.ndarray, ...]:
         raise NotImplementedError
@@ -171,7 +169,7 @@ class EstimatorBase:
 
     def reset(self, record: SensorRecord, *, base_xy: tuple[float, float] = (0.0, 0.0),
               keep_yaw: bool = False) -> StateEstimate:
-        """Start from ``record`` on four loaded feet, at rest (description order).
+        """Start from ``record`` at rest on its feet (:func:`floor_shift`), description order.
 
         Args:
             record: The first sample (:meth:`start_problem` says what it needs; without a
@@ -192,6 +190,7 @@ class EstimatorBase:
         self.start_kernel(quat, np.asarray(record.q, dtype=float), self._params,
                           *self._leg_arrays(), *self._filter_arrays(), float(base_xy[0]),
                           float(base_xy[1]), bool(keep_yaw), self._work)
+        self._shift_height(floor_shift(self.foot_positions[:, 2], self.config.foot_radius_m))
         self._foot_contact[:] = 1.0
         self._foot_same_s[:] = 0.0
         self._foot_good_s[:] = 0.0
@@ -267,8 +266,7 @@ class EstimatorBase:
         if was_usable and not estimate.usable:
             self._lost_xy = (float(estimate.q[0]), float(estimate.q[1]))
         elif not was_usable and estimate.trusted and not self.start_problem(record):
-            # Back after over the trust limit: drop what was integrated across the gap and
-            # start again from this sample where the base was (a new world's yaw at 0).
+            # Back after the trust limit: start again here, not integrating across the gap.
             self.restarts += 1
             return self.reset(record, base_xy=self._lost_xy)
         if flags != self._described:  # the text is built when what it says changes
@@ -387,6 +385,9 @@ class StateEstimator(EstimatorBase):
 
     def _filter_arrays(self) -> tuple[np.ndarray, ...]:
         return self._state, self._x, self._P
+
+    def _shift_height(self, dz: float) -> None:
+        self._x[2, [0, 2, 3, 4, 5]] += dz  # the IMU's height and the feet's [m]
 
     @property
     def gyro_bias(self) -> np.ndarray:
