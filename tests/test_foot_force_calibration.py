@@ -173,6 +173,13 @@ def test_invariant_ekf_takes_the_accelerometer_bias_and_tilt_measured_at_rest():
     estimator = started(InvariantEkf)
     up = np.array([0.02, -0.01, 1.0])
     up /= np.linalg.norm(up)
+
+    def feet_in_base() -> np.ndarray:
+        x, y, z, w = estimator.estimate.q[3:7]
+        rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
+        return (estimator.foot_positions - estimator.estimate.q[:3]) @ rotation
+
+    before = feet_in_base()
     turn = estimator.set_imu_at_rest([0.1, -0.05, 0.02], up)
     assert math.degrees(turn) == pytest.approx(math.degrees(math.atan(math.hypot(0.02, 0.01))),
                                                rel=1e-6)
@@ -180,6 +187,8 @@ def test_invariant_ekf_takes_the_accelerometer_bias_and_tilt_measured_at_rest():
     assert estimator.covariance[26, 26] == pytest.approx(0.005 ** 2)
     assert estimator.covariance[26, 0] == 0.0
     estimate = estimator.update(record(pose(), tick=1), LOADED)
+    # The feet turned with the base: their base-frame places are what the legs measure.
+    np.testing.assert_allclose(feet_in_base(), before, atol=2e-4)
     x, y, z, w = estimate.q[3:7]
     rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
     np.testing.assert_allclose(rotation.T @ [0.0, 0.0, 1.0], up, atol=2e-4)  # one tick later

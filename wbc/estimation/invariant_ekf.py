@@ -55,10 +55,27 @@ import numpy as np
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector, known_fields_only
 from wbc.estimation.estimator_config import SensorTrustConfig
-from wbc.estimation.invariant_ekf_group import _ABIAS, _DIM, _FEET, _GBIAS, _POS, _QUAT, _X_SIZE
+from wbc.estimation.invariant_ekf_group import (
+    _ABIAS,
+    _DIM,
+    _FEET,
+    _GBIAS,
+    _POS,
+    _QUAT,
+    _VEL,
+    _X_SIZE,
+)
 from wbc.estimation.invariant_ekf_kernels import _WORK_SIZE, _estimate, _start
 from wbc.estimation.state_estimator import EstimatorBase
 from wbc.model.description import Go2Description
+
+
+def _rotation_wxyz(quat: np.ndarray) -> np.ndarray:
+    """The rotation matrix of a unit quaternion ``(w, x, y, z)``."""
+    w, x, y, z = quat
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 @known_fields_only("estimator parameter")
@@ -228,6 +245,15 @@ class InvariantEkf(EstimatorBase):
                                   a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
                                   a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
                                   a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]]
+            # The whole state turns with the base about the IMU (the world turns by
+            # W = R_new R_old^T): the feet keep their place in the base frame, so their
+            # measurements do not pull the orientation back. (The covariance is left as it
+            # is: a turn of a degree or two changes it by as little.)
+            turn = _rotation_wxyz(x[_QUAT:_QUAT + 4]) @ _rotation_wxyz(a).T
+            position = x[_POS:_POS + 3].copy()
+            x[_VEL:_VEL + 3] = turn @ x[_VEL:_VEL + 3]
+            feet = x[_FEET:_FEET + 12].reshape(4, 3)
+            feet[:] = position + (feet - position) @ turn.T
         return angle
 
     @property
