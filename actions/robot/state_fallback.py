@@ -26,8 +26,9 @@ computed for a state that is no longer known (a high five's raised leg, a body l
 three feet), and held for 55 s they pushed a simulated GO2 0.27 m with both front feet held
 up (issue 29). Why 80 N m s/rad on the stance legs: the body sinks slowly enough to stay
 where it was (1 s of stale state in a high five's hold, on three feet: 1.6 cm of travel,
-1.7 cm down; 3.2 cm at 40, 9.9 cm and a collapse at 5), and 1 on a leg in the air lets it
-come down rather than be held. See docs/dds.md, "When the state stops", for the figures.
+1.7 cm down; 3.2 cm at 40; at 5 it collapses: 10.2 cm, 19 cm down, 21.5 deg), and 1 on a
+leg in the air lets it come down rather than be held. See docs/dds.md, "When the state
+stops", for the figures.
 """
 
 from __future__ import annotations
