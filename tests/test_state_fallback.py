@@ -152,3 +152,30 @@ def test_a_sit_that_ends_aborted_is_named_and_the_robot_is_not_said_to_be_at_res
                           "estimate: no trustworthy sensor sample for 11 ms (limit 10 ms): "
                           "stale sample (tick ")
     assert damped.startswith("damping (not at rest: base at 0.")
+
+
+def test_a_recovery_stand_that_fails_is_sent_again():
+    loop = ControlLoop.simulated(sensor_faults=[SensorFault("dropout", 0.0, 0.02)])
+    spin_until(loop, LoopMode.RECOVERING, 0.1)
+    loop.spin_once()  # the stand sent in the last tick starts in this one
+    (first,) = loop.runner.active_goals()
+    # One tick whose command a driver would refuse (the guard's safe command): the stand,
+    # which aborts on a controller fault, ends ABORTED.
+    step = loop.controller.step
+
+    def wild(q, v):
+        out = step(q, v)
+        out.tau_ff = out.tau_ff.copy()
+        out.tau_ff[4] = 1e3
+        return out
+
+    loop.controller.step = wild
+    loop.spin_once()
+    loop.controller.step = step
+    loop.spin_for(0.005)
+    assert first.status is GoalStatus.ABORTED
+    assert loop.fallback.mode is LoopMode.RECOVERING
+    (second,) = loop.runner.active_goals()
+    assert second.goal_id != first.goal_id and second.label.endswith("(stand)")
+    spin_until(loop, LoopMode.CONTROLLING, 2.1)
+    assert second.status is GoalStatus.SUCCEEDED
