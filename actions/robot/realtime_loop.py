@@ -168,7 +168,7 @@ class RealtimeLoop:
         self.last_output: ControlOutput | None = None
         #: Whether the last tick overran the next deadline.
         self.missed = False
-        self._last_fresh_s = loop.robot.time_s  # the loop was built from a sample
+        self._last_fresh_s = loop.robot.time_s  # built from a sample, or WAITING (damping)
         self._stale = False
         self._started = False
         self._status_mark = (math.nan, 0, 0, 0)
