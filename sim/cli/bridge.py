@@ -224,6 +224,11 @@ def run_bridge(args: argparse.Namespace) -> int:
         f"{bridge.steps} physics steps); CPU {cpu_percent:.0f} % of one core")
     for line in bridge.stats.summary_lines():
         say(line)
+    if bridge.gaps is not None:
+        gaps = bridge.gaps.report()
+        say(f"gaps as Unitree's Python simulator has them: {gaps['gaps']} "
+            f"({gaps['states_withheld']} states not sent, {gaps['states_repeated']} sent again "
+            "with the physics halted)")
     if args.report is not None:
         report = bridge.report() | {"stopped_by": stopped_by[0],
                                     "cpu_percent": round(cpu_percent, 1)}
