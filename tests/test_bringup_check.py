@@ -1,4 +1,4 @@
-"""The bring-up check (:mod:`wbc.robot_io.dds.bringup_check`, ``go2-wbc check --dds``): what
+"""The bring-up check (:mod:`actions.robot.bringup_check`, ``go2-wbc check --dds``): what
 it finds in synthetic streams framed as a GO2, Unitree's Python simulator and broken robots,
 and against the simulator bridge on loopback DDS."""
 
@@ -14,16 +14,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from actions.robot.bringup_check import (
+    GRAVITY_M_S2,
+    base_height,
+    check_stream,
+)
 from sim.bridge_config import BridgeConfig
 from sim.cli import main
 from sim.dds_bridge import DdsBridge
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import JOINT_NAMES, Go2Description
-from wbc.robot_io.dds.bringup_check import (
-    GRAVITY_M_S2,
-    base_height,
-    check_stream,
-)
 from wbc.robot_io.dds.c_layout import LEVEL_FLAG_LOW, crc_ok, set_crc
 from wbc.robot_io.dds.low_state_conversion import low_state_from_sensor_record
 from wbc.robot_io.dds.state_listener import ListenedStream, StateListener
@@ -91,13 +91,36 @@ def test_a_go2_standing_still_passes_with_its_rate_framing_pose_and_imu_at_rest(
     np.testing.assert_allclose(report.figures["gyro_bias_rad_s"], 0.003, atol=0.001)
     assert report.figures["gravity_m_s2"] == pytest.approx(GRAVITY_M_S2, abs=0.01)
     assert "nobody else writes rt/lowcmd" in text
-    assert text.splitlines()[-4:] == [
-        "settings to use:",
-        "  stream go2: run --dds recognises it by itself (no option)",
-        ("  staleness limit: run --dds derives it from the rate at its start (40 ms at 500 Hz: "
+    assert report.settings == [
+        "foot-force calibration: the default reads the weight within 15% (no option)",
+        "stream go2: run --dds recognises it by itself (no option)",
+        ("staleness limit: run --dds derives it from the rate at its start (40 ms at 500 Hz: "
          "20 periods or twice the longest gap, 20 to 250 ms)"),
-        ("  gyroscope bias and gravity in range: the estimator learns the bias as it runs (no "
+        ("gyroscope bias and gravity in range: the estimator learns the bias as it runs (no "
          "option)")]
+    assert text.splitlines()[-5] == "settings to use:"
+    # Each foot's static load, the smallest forces that carry the weight: in the SRDF pose,
+    # level, the centre of mass is ahead of the feet's centre, so the front feet carry more.
+    loads = np.array(report.figures["static_loads_n"])
+    assert loads.sum() == pytest.approx(report.figures["weight_n"])
+    np.testing.assert_allclose(loads, report.figures["weight_n"] / 4, rtol=0.15)
+    assert loads[0] > loads[2] + 5.0 and loads[1] > loads[3] + 5.0
+
+
+def test_feet_on_another_scale_get_the_gains_that_read_the_weight():
+    """Counts 30 + 0.25/N (the issue's foot sensors) read with the default 10 + 2.5/N."""
+    weight = DESCRIPTION.total_mass * GRAVITY_M_S2
+    report = check_stream(_stream(feet=30.0 + 0.25 * weight / 4))
+    assert report.ok
+    assert report.figures["weight_read_with_default_n"] == pytest.approx(
+        4 * (0.25 * weight / 4 + 20.0) / 2.5, rel=0.02)
+    line = report.settings[0]
+    assert line.startswith("foot-force calibration: the default reads the weight -")
+    gains = [float(g) for g in line.split("foot_force_gain=")[1].split(" ")[0].split(",")]
+    # At offset 10 the gains read each foot's static load from its count.
+    loads = np.array(report.figures["static_loads_n"])
+    np.testing.assert_allclose(10.0 + np.array(gains) * loads, 30.0 + 0.25 * weight / 4,
+                               rtol=0.01)
 
 
 def test_unitree_python_framing_is_accepted_with_no_crc_no_tick_and_no_foot_force():

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from wbc.estimation.foot_force_calibration import FootForceCalibration, static_foot_loads
 from wbc.model.description import FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
 from wbc.model.joint_map import JointMap
 from wbc.robot_io.dds.low_state_conversion import sensor_record_from_low_state
@@ -51,6 +52,9 @@ LYING_BELOW_M, STANDING_ABOVE_M = 0.15, 0.25
 GRAVITY_TOLERANCE = 0.05
 #: A gyroscope mean above this at rest [rad/s] is a large bias.
 GYRO_BIAS_LIMIT_RAD_S = 0.05
+#: The default foot-force calibration reading the weight this far off [share] gets gains to
+#: set (the estimator's own weight check names a calibration off by much more).
+CALIBRATION_TOLERANCE = 0.15
 #: Fewest states for a verdict.
 MIN_STATES = 10
 
@@ -111,7 +115,7 @@ class BringupReport:
 
 def check_stream(stream: ListenedStream, *,
                  description: Go2Description | None = None) -> BringupReport:
-    """Everything :mod:`this module <wbc.robot_io.dds.bringup_check>` finds in ``stream``.
+    """Everything :mod:`this module <actions.robot.bringup_check>` finds in ``stream``.
 
     Args:
         stream: What the listener heard.
@@ -134,7 +138,10 @@ def check_stream(stream: ListenedStream, *,
     _check_joints(report, q, description)
     still = _check_pose(report, q, samples, description)
     _check_imu(report, samples, still=still)
-    _check_feet(report, np.array([s.foot_force for s in samples]))
+    geometry = _geometry(q.mean(axis=0), np.mean([s.imu_quaternion_wxyz for s in samples],
+                                                 axis=0), description)
+    _check_feet(report, np.array([s.foot_force for s in samples]), geometry,
+                weight_n=description.total_mass * GRAVITY_M_S2)
     _check_commands(report, stream)
     _settings(report)
     return report
@@ -270,16 +277,28 @@ def base_height(joint_q: np.ndarray, quaternion_wxyz: np.ndarray,
                 description: Go2Description) -> float:
     """The base's height [m] above the lowest three feet on flat ground, from the joints
     (description order) and the IMU's attitude ``(w, x, y, z)``; NaN if either is unusable."""
+    geometry = _geometry(joint_q, quaternion_wxyz, description)
+    if geometry is None:
+        return math.nan
+    feet, _ = geometry
+    return float(-np.mean(np.sort(feet[:, 2])[:3]) + FOOT_RADIUS_M)
+
+
+def _geometry(joint_q: np.ndarray, quaternion_wxyz: np.ndarray, description: Go2Description
+              ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The feet's positions (4, 3) and the centre of mass (3,) [m], ``LEGS`` order, in a
+    level frame at the base, from the joints and the IMU's attitude; ``None`` if unusable."""
     norm = float(np.linalg.norm(quaternion_wxyz))
     if not (np.isfinite(joint_q).all() and math.isfinite(norm) and norm > 0.5):
-        return math.nan
+        return None
     w, x, y, z = np.asarray(quaternion_wxyz) / norm
     model = description.model
     data = model.createData()
     config = np.concatenate([[0.0, 0.0, 0.0, x, y, z, w], joint_q])
     pin.framesForwardKinematics(model, data, config)
-    feet = sorted(data.oMf[model.getFrameId(f"{leg}_foot")].translation[2] for leg in LEGS)
-    return float(-np.mean(feet[:3]) + FOOT_RADIUS_M)
+    com = pin.centerOfMass(model, data, config)
+    feet = np.array([data.oMf[model.getFrameId(f"{leg}_foot")].translation for leg in LEGS])
+    return feet, np.array(com)
 
 
 def _check_imu(report: BringupReport, samples: list[SensorRecord], *, still: bool) -> None:
@@ -312,17 +331,58 @@ def _check_imu(report: BringupReport, samples: list[SensorRecord], *, still: boo
                or float(np.max(np.abs(bias))) > GYRO_BIAS_LIMIT_RAD_S)
 
 
-def _check_feet(report: BringupReport, counts: np.ndarray) -> None:
-    report.figures["foot_force_mean"] = dict(zip(LEGS, counts.mean(axis=0).tolist(),
-                                                 strict=True))
+def _check_feet(report: BringupReport, counts: np.ndarray, geometry: tuple | None, *,
+                weight_n: float) -> None:
+    """The foot counts and, with the robot still, what they say of the calibration: lying,
+    the counts bound the offsets; standing, each foot's static load (the smallest forces that
+    carry the weight, :func:`~wbc.estimation.foot_force_calibration.static_foot_loads`)
+    against its count gives the gains at the estimator's offsets."""
+    mean = counts.mean(axis=0)
+    report.figures["foot_force_mean"] = dict(zip(LEGS, mean.tolist(), strict=True))
     if not counts.any():
         report.figures["foot_force_absent"] = True
         report.add("feet", "foot force absent (every count 0, as Unitree's simulators send): "
                            "contact from the controller's schedule only")
         return
     means = ", ".join(f"{leg} {m:.1f}±{s:.1f}" for leg, m, s in zip(
-        LEGS, counts.mean(axis=0), counts.std(axis=0), strict=True))
+        LEGS, mean, counts.std(axis=0), strict=True))
     report.add("feet", f"foot-force counts (mean±std): {means}")
+    posture = report.figures.get("posture")
+    if not report.figures.get("still") or geometry is None:
+        return
+    if posture == "lying":
+        report.add("feet", "lying still: each foot's count is at most its offset plus what "
+                           "the foot carries of the body (an upper bound of the offsets)")
+        return
+    if posture != "standing":
+        return
+    feet, com = geometry
+    loads = static_foot_loads(feet[:, :2], com[:2], weight_n)
+    default = FootForceCalibration(source="default")
+    carried = float(default.newtons(mean).sum())
+    gains = (mean - default.offsets) / loads
+    report.figures.update(static_loads_n=loads.tolist(), weight_n=weight_n,
+                          weight_read_with_default_n=carried,
+                          gains_at_default_offsets=gains.tolist())
+    report.add("feet", f"standing still: static loads {_per_leg(loads, '.1f')} N "
+                       f"({weight_n:.1f} N in all); the estimator's default calibration "
+                       f"({default.offsets[0]:g} + {default.gains[0]:g}/N a foot) reads "
+                       f"{carried:.1f} N ({carried / weight_n:.0%} of the weight); at its "
+                       f"offsets the gains are {_per_leg(gains, '.3g')} counts/N")
+    if abs(carried / weight_n - 1.0) > CALIBRATION_TOLERANCE and np.all(gains > 0.0):
+        report.settings.append(
+            "foot-force calibration: the default reads the weight "
+            f"{carried / weight_n - 1.0:+.0%} off: --estimator-param foot_force_gain="
+            f"{','.join(f'{g:.3g}' for g in gains)} (at the default offsets "
+            f"{default.offsets[0]:g}; measure the offsets with the feet unloaded, or run the "
+            "standing calibration, for both)")
+    else:
+        report.settings.append("foot-force calibration: the default reads the weight within "
+                               f"{CALIBRATION_TOLERANCE:.0%} (no option)")
+
+
+def _per_leg(values: np.ndarray, fmt: str) -> str:
+    return ", ".join(f"{leg} {v:{fmt}}" for leg, v in zip(LEGS, values, strict=True))
 
 
 def _check_commands(report: BringupReport, stream: ListenedStream) -> None:

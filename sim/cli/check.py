@@ -1,5 +1,5 @@
 """``go2-wbc check --dds``: listen to a robot's ``rt/lowstate`` for a few seconds, command
-nothing, and say what it finds (:mod:`wbc.robot_io.dds.bringup_check`): the first thing to run
+nothing, and say what it finds (:mod:`actions.robot.bringup_check`): the first thing to run
 on a robot, or a simulator, the project did not write."""
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ def run_check(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int
     """``go2-wbc check --dds``; returns the exit status."""
     if not args.dds:
         args.parser.error("--dds: required ('check' listens to a robot over DDS)")
-    from wbc.robot_io.dds.bringup_check import check_stream
+    from actions.robot.bringup_check import check_stream
     from wbc.robot_io.dds.state_listener import StateListener
 
     out = stream or sys.stdout
