@@ -47,7 +47,8 @@ def add_check_command(sub: Any) -> None:
                     "commanding it, and print what it finds and the settings to use.",
         epilog=CHECK_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     robot = check.add_argument_group("robot")
-    add_dds_options(robot, flag_help="listen to a robot over DDS (required)")
+    add_dds_options(robot, flag_help="listen to a robot over DDS (required, no default: "
+                                     "the check only listens on DDS)")
     robot.add_argument("--seconds", type=float_in(0.5, 600.0, what="a time", unit="s",
                                                   fmt="g"),
                        default=LISTEN_S, metavar="S",
