@@ -1,6 +1,6 @@
 """Timing a controller through a lift of FR in closed loop, tick by tick, for the QP benchmark.
 
-Every run drives a fresh loop of the default episode (:func:`sim.episode_runner.build_loop`:
+Every run drives a fresh loop of the default episode (:func:`sim.episode_loop.build_loop`:
 the default plant, sensors and estimator) by hand, read, step, write, through a
 :class:`wbc.LegLift` (no action runner: the controller's tick alone is timed), after
 :data:`WARMUP_TICKS` standing ticks that no statistic counts.
@@ -17,7 +17,7 @@ import numpy as np
 
 from actions.go2.high_five_behaviour import PHASE_NAMES
 from sim.episode import Episode, episode_default
-from sim.episode_runner import build_loop
+from sim.episode_loop import build_loop
 from sim.run_recorder import MetricsHook
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.placo_controller import PlacoController

@@ -63,8 +63,9 @@ from actions.ros_interfaces.trajectory_msgs import JointTrajectory, JointTraject
 from benchmarks.reporting import json_safe, machine
 from benchmarks.timed_ticks import TimedTicks
 from sim.episode import Episode, episode_default
+from sim.episode_loop import build_loop
 from sim.episode_result import NO_GOAL
-from sim.episode_runner import EpisodeRunner, build_loop
+from sim.episode_runner import EpisodeRunner
 
 #: Control periods [s] of the runs: 1 kHz and the GO2's usual 500 Hz.
 PERIODS_S = (1e-3, 2e-3)

@@ -58,8 +58,9 @@ from benchmarks.robustness_report import format_report
 from sim.control_loop import ControlLoop, TickHook
 from sim.disturbances import Push
 from sim.episode import Episode, episode_default
+from sim.episode_loop import build_loop
 from sim.episode_metrics import EpisodeSummary
-from sim.episode_runner import EpisodeRunner, build_loop
+from sim.episode_runner import EpisodeRunner
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.whole_body_controller import WholeBodyController
 from wbc.core.errors import WbcError

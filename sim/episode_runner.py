@@ -14,15 +14,14 @@ as it happens (the command line prints from one).
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sim.disturbances import PushSchedule
 from sim.episode import GOAL_SLACK_S, Episode
+from sim.episode_loop import build_loop
 from sim.episode_result import (
     INTERRUPTED,
     NO_GOAL,
@@ -59,49 +58,6 @@ _ENDED = ("SUCCEEDED", "CANCELED", "ABORTED")
 
 class RenderingUnavailableError(WbcError):
     """A video was asked for where offscreen rendering cannot start (the GL backend's error)."""
-
-
-@contextlib.contextmanager
-def startup_objects_frozen() -> Iterator[None]:
-    """Keep what start-up allocated out of the garbage collector's scans while the loop runs.
-
-    Building the loop leaves about 150,000 objects (the models, MuJoCo, numba's compiled
-    code); a full collection of them takes about 20 ms, twenty control periods if it came
-    inside a tick. The loop's ticks free what they allocate, so full collections are rare,
-    but a long run gets one. ``gc.freeze()`` moves them all to a generation no collection
-    scans; ``gc.unfreeze()`` gives them back when the block ends (the command line may run
-    inside a longer-lived Python process). Do the same around your own loop.
-    """
-    gc.freeze()
-    try:
-        yield
-    finally:
-        gc.unfreeze()
-
-
-def build_loop(episode: Episode, controller: BalanceController | None = None) -> ControlLoop:
-    """A fresh simulated loop for ``episode``: its plant, rates, sensors, state source,
-    estimator, delay, faults and start pose (not settled).
-
-    Args:
-        episode: The episode.
-        controller: The controller (default: a :class:`wbc.WholeBodyController` with the
-            episode's control period and ``controller_params``).
-    """
-    from sim.control_loop import ControlLoop
-    from wbc.controller.whole_body_controller import WholeBodyController
-
-    if controller is None:
-        controller = WholeBodyController(control_period_s=episode.control_period_s,
-                                         **dict(episode.controller_params))
-    return ControlLoop.simulated(
-        pose=episode.start_pose, plant=episode.plant_model,
-        control_period_s=episode.control_period_s, physics_timestep_s=episode.timestep_s,
-        controller=controller, sensors=episode.sensor_model, sensor_seed=episode.sensor_seed,
-        state=episode.state,
-        estimator=episode.make_estimator() if episode.state == "estimate" else None,
-        command_delay_ticks=episode.command_delay_ticks,
-        sensor_faults=list(episode.sensor_faults))
 
 
 class EpisodeRunner:

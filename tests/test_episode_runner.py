@@ -10,8 +10,9 @@ from actions.go2.go2_actions import GO2_ACTIONS
 from sim.control_loop import ControlLoop
 from sim.disturbances import DelayedRobot, Push
 from sim.episode import Episode
+from sim.episode_loop import build_loop
 from sim.episode_result import NO_GOAL, REJECTED, EpisodeListener
-from sim.episode_runner import EpisodeRunner, build_loop
+from sim.episode_runner import EpisodeRunner
 from wbc.model.description import LEGS
 
 HighFiveGoal = GO2_ACTIONS["high_five"].Goal

@@ -29,7 +29,7 @@ from sim.cli.output import state_line
 from sim.cli.parser import build_parser
 from sim.cli.send_goal import SendGoal
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
-from sim.episode_runner import startup_objects_frozen
+from sim.episode_loop import startup_objects_frozen
 
 __all__ = [
     "EXIT_CODES_HELP", "EXIT_INTERRUPTED", "EXIT_NOT_SUCCEEDED", "EXIT_REJECTED",

@@ -203,7 +203,7 @@ def run_bridge(args: argparse.Namespace) -> int:
         cpu_s = time.process_time()
         code = EXIT_SUCCEEDED
         # What start-up allocated stays out of the collector's scans: a full collection of
-        # it would stall the loop for ~20 ms (sim.episode_runner.startup_objects_frozen).
+        # it would stall the loop for ~20 ms (sim.episode_loop.startup_objects_frozen).
         gc.freeze()
         try:
             with RealtimeScheduling(args.rt_priority) as scheduling:

@@ -16,8 +16,9 @@ from actions.go2.go2_actions import HIGH_FIVE_ACTION
 from sim.cli.episode_options import goal_episode
 from sim.cli.exit_codes import EXIT_INTERRUPTED, EXIT_UNAVAILABLE, exit_code
 from sim.cli.output import FeedbackPrinter, metrics_text, plant_line, state_line
+from sim.episode_loop import startup_objects_frozen
 from sim.episode_result import REJECTED, UNAVAILABLE, EpisodeListener, EpisodeResult
-from sim.episode_runner import EpisodeRunner, RenderingUnavailableError, startup_objects_frozen
+from sim.episode_runner import EpisodeRunner, RenderingUnavailableError
 from sim.run_recorder import write_plot
 
 if TYPE_CHECKING:

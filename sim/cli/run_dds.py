@@ -124,7 +124,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     from actions.robot.realtime_loop import RealtimeLoop, stop_on_signals
     from actions.robot.rest_sequence import RestSettings
     from actions.robot.tick_log import TickLog
-    from sim.episode_runner import startup_objects_frozen
+    from sim.episode_loop import startup_objects_frozen
     from wbc.controller.whole_body_controller import WholeBodyController
     from wbc.estimation.estimators import make_estimator
 

@@ -28,8 +28,9 @@ from sim.cli.episode_options import goal_episode
 from sim.cli.exit_codes import EXIT_CODES_HELP, EXIT_SUCCEEDED, exit_code
 from sim.cli.options import add_plant_options, add_state_options
 from sim.cli.output import plant_line, state_line
+from sim.episode_loop import startup_objects_frozen
 from sim.episode_result import UNAVAILABLE, EpisodeListener, EpisodeResult
-from sim.episode_runner import EpisodeRunner, startup_objects_frozen
+from sim.episode_runner import EpisodeRunner
 from wbc.core.errors import WbcError
 
 if TYPE_CHECKING:
