@@ -28,12 +28,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from actions.go2.robot_context import STANDING_HEIGHT_M
 from actions.robot.control_loop import ControlLoop
+from actions.robot.rest_sequence import Phase
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.control_output import ControlOutput
 from wbc.core.conventions import GRAVITY_M_S2
@@ -171,6 +174,12 @@ class StandingCalibration:
     def done(self) -> bool:
         """The calibration has ended (its :attr:`report` is ready)."""
         return self.report is not None
+
+    def cancel(self, controller: BalanceController) -> None:
+        """Stop before the end, learning nothing: the centre-of-mass target back where it
+        was when the calibration started."""
+        if self._start_s is not None and not self.done:
+            controller.set_com_target(self._target)
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         if self.done:
@@ -319,3 +328,66 @@ def calibrate_standing(loop: ControlLoop, *, duration_s: float = 2.0,
     if report is None:  # cannot happen: the loop above ends when it is set
         raise ConfigurationError("calibrate_standing: the calibration did not end")
     return report
+
+
+#: Why goals are refused while :class:`CalibrateWhenStanding` runs.
+CALIBRATING = "calibrating the sensors while standing"
+
+
+class CalibrateWhenStanding:
+    """A wall-clock loop's callback (``go2-wbc run --dds --calibrate S``): once the robot
+    stands under control with no goal running, a :class:`StandingCalibration` of
+    ``duration_s`` [s]; goals are refused meanwhile (they would move the centre of mass the
+    calibration moves). Abandoned, keeping the estimator's calibration, when the loop falls
+    back (no trustworthy state) or is asked to stop.
+
+    Args:
+        duration_s: How long [s] it sways and fits.
+        say: Told each step (started, the report's lines, abandoned).
+    """
+
+    def __init__(self, duration_s: float, say: Callable[[str], None]) -> None:
+        self.duration_s = as_float("duration_s", duration_s, low=0.2, high=60.0)
+        self.say = say
+        self.routine: StandingCalibration | None = None
+        #: The calibration's report once it ended; ``None`` before, or when abandoned.
+        self.report: CalibrationReport | None = None
+        #: Why it was abandoned ('' when it was not).
+        self.abandoned = ""
+
+    @property
+    def finished(self) -> bool:
+        """It ended, with a report or abandoned."""
+        return self.report is not None or bool(self.abandoned)
+
+    def __call__(self, rt: Any) -> None:
+        if self.finished:
+            return
+        loop = rt.loop
+        context = loop.context
+        if self.routine is None:
+            if (loop.ready and not context.goal_refusal and not loop.runner.active_goals()
+                    and rt.rest.phase is Phase.RUNNING
+                    and context.q[2] >= STANDING_HEIGHT_M):
+                self.routine = StandingCalibration(duration_s=self.duration_s)
+                loop.hooks.append(self.routine)
+                context.goal_refusal = CALIBRATING
+                self.say(f"calibrating the sensors while standing ({self.duration_s:g} s: the "
+                         "centre of mass circles; goals are refused meanwhile)")
+            return
+        if self.routine.done:
+            self._end(loop)
+            self.report = self.routine.report
+            for line in self.report.describe().splitlines():  # type: ignore[union-attr]
+                self.say(line)
+        elif context.goal_refusal != CALIBRATING or rt.rest.phase is not Phase.RUNNING:
+            self.routine.cancel(loop.controller)
+            self._end(loop)
+            self.abandoned = context.goal_refusal or f"stopping ({rt.rest.phase.name})"
+            self.say(f"calibration abandoned ({self.abandoned}): the estimator keeps "
+                     f"{loop.estimator.foot_calibration.describe()}")
+
+    def _end(self, loop: ControlLoop) -> None:
+        loop.hooks.remove(self.routine)
+        if loop.context.goal_refusal == CALIBRATING:
+            loop.context.goal_refusal = ""

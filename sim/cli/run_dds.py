@@ -97,6 +97,13 @@ def add_run_command(sub: Any) -> None:
                      metavar="S", help="send the safe command after this long without a new "
                                        "state [s], the watchdog's and the estimator's limit "
                                        "(default: from the rate measured at start, see below)")
+    dds.add_argument("--calibrate", type=float_in(0.2, 60.0, what="a duration", unit="s",
+                                                  fmt="g"),
+                     metavar="S", help="once the robot stands, learn each foot sensor's "
+                                       "offset and gain and check the IMU at rest: S seconds "
+                                       "of the centre of mass circling 4.5 cm, goals refused "
+                                       "meanwhile (2 is enough; default: no calibration, the "
+                                       "given or default one)")
     dds.add_argument("--estimator", choices=tuple(ESTIMATORS), default=DEFAULT_ESTIMATOR,
                      help=f"the state estimator (default: {DEFAULT_ESTIMATOR})")
     dds.add_argument("--estimator-param", type=estimator_param, action="append", default=[],
@@ -121,6 +128,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     from actions.dds.dds_action_bridge import DdsActionBridge
     from actions.robot.control_loop import ControlLoop
     from actions.robot.dds_robot import DdsRobot, NoRobotStateError
+    from actions.robot.foot_calibration import CalibrateWhenStanding
     from actions.robot.realtime_loop import RealtimeLoop, stop_on_signals
     from actions.robot.rest_sequence import RestSettings
     from actions.robot.tick_log import TickLog
@@ -177,6 +185,10 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         if log is not None:
             rt.callbacks.append(log.record)
         rt.callbacks.append(_StatusPrinter(say, dry_run=args.dry_run))
+        calibration = None
+        if args.calibrate is not None:
+            calibration = CalibrateWhenStanding(args.calibrate, say)
+            rt.callbacks.append(calibration)
         say(f"controlling at {args.control_rate} Hz; actions served: "
             f"{', '.join(bridge.action_names)}"
             + (" (DRY RUN: no command is published)" if args.dry_run else "")
@@ -192,6 +204,10 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             say(scheduling.describe())
             rt.run(duration_s=args.duration)
         report = rt.report()
+        if calibration is not None:
+            report["calibration"] = (
+                calibration.report.as_dict() if calibration.report is not None
+                else {"abandoned": calibration.abandoned or "the robot never stood still"})
         say(_summary(report))
         if args.report is not None:
             args.report.write_text(json.dumps(report, indent=2, default=str) + "\n")
