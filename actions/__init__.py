@@ -80,22 +80,17 @@ if TYPE_CHECKING:
     from actions.robot.control_loop import ControlLoop
     from actions.robot.robot_interface import MappedRobot, RobotInterface, TrueState, check_robot
 
-#: The robot loop's names, imported on first use: the loop pulls in the controller, which a
-#: process that only sends goals (``go2-wbc high-five --dds``) does not need (~1.7 s).
-_ROBOT_LOOP = {
-    "ControlLoop": "actions.robot.control_loop",
-    "MappedRobot": "actions.robot.robot_interface",
-    "RobotInterface": "actions.robot.robot_interface",
-    "TrueState": "actions.robot.robot_interface",
-    "check_robot": "actions.robot.robot_interface",
-}
+#: The robot loop's names (:mod:`actions.robot`'s), imported on first use: the loop pulls in
+#: the controller, which a process that only sends goals (``go2-wbc high-five --dds``) does
+#: not need (~1.7 s).
+_ROBOT_LOOP = ("ControlLoop", "MappedRobot", "RobotInterface", "TrueState", "check_robot")
 
 
 def __getattr__(name: str) -> Any:
     if name in _ROBOT_LOOP:
         import importlib
 
-        return getattr(importlib.import_module(_ROBOT_LOOP[name]), name)
+        return getattr(importlib.import_module("actions.robot"), name)
     raise AttributeError(f"module 'actions' has no attribute {name!r}")
 
 

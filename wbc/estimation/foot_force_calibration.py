@@ -190,17 +190,8 @@ class FootForceFit:
                 cannot be told from its offset: the loads named), or a gain that is not
                 positive (the sensor does not follow the load: the foot named).
         """
-        if self.samples < self.min_samples:
-            raise ConfigurationError(
-                f"foot-force fit: expected at least {self.min_samples} samples, received "
-                f"{self.samples}")
-        spread = self.spread_n()
-        flat = [f"{leg} {s:.2g} N" for leg, s in zip(LEGS, spread) if s < self.min_spread_n]
-        if flat:
-            raise ConfigurationError(
-                f"foot-force fit: the load on a foot must change by at least "
-                f"{self.min_spread_n:g} N (standard deviation) to tell its gain from its "
-                f"offset; received {', '.join(flat)}: shift the robot's weight while fitting")
+        _check_fit_data(self.samples, self.min_samples, self.spread_n(), self.min_spread_n,
+                        "shift the robot's weight while fitting")
         n, sx, sy, sxx, sxy = self._sums
         gain = (sxy / n - sx * sy / n ** 2) / (sxx / n - (sx / n) ** 2)
         bad = [f"{leg} {g:.3g}" for leg, g in zip(LEGS, gain) if not (g > 0 and math.isfinite(g))]
@@ -305,17 +296,8 @@ class WeightShiftFit:
                 beyond 45 degrees or a gain that is not positive (the sensors do not follow
                 the weight: the feet named).
         """
-        if self.samples < self.min_samples:
-            raise ConfigurationError(
-                f"foot-force fit: expected at least {self.min_samples} samples, received "
-                f"{self.samples}")
-        spread = self.spread_n()
-        flat = [f"{leg} {s:.2g} N" for leg, s in zip(LEGS, spread) if s < self.min_spread_n]
-        if flat:
-            raise ConfigurationError(
-                f"foot-force fit: the load on a foot must change by at least "
-                f"{self.min_spread_n:g} N (standard deviation) to tell its gain from its "
-                f"offset; received {', '.join(flat)}: shift the robot's weight further")
+        _check_fit_data(self.samples, self.min_samples, self.spread_n(), self.min_spread_n,
+                        "shift the robot's weight further")
         n = self.samples
         z_mean, c_mean = self._z / n, self._c / n
         cov = self._zz / n - np.outer(z_mean, z_mean)
@@ -342,6 +324,21 @@ class WeightShiftFit:
         mean_loads = static_foot_loads(feet, origin[:2] + z_mean, self.weight_n)
         offset = origin[2:] + c_mean - gain * mean_loads
         return FootForceCalibration(offset=tuple(offset), gain=tuple(gain), source=source)
+
+
+def _check_fit_data(samples: int, min_samples: int, spread_n: np.ndarray,
+                    min_spread_n: float, hint: str) -> None:
+    """Refuse a fit on too few samples or on a foot whose load barely changed (its gain cannot
+    be told from its offset), naming the loads and what to do (``hint``)."""
+    if samples < min_samples:
+        raise ConfigurationError(
+            f"foot-force fit: expected at least {min_samples} samples, received {samples}")
+    flat = [f"{leg} {s:.2g} N" for leg, s in zip(LEGS, spread_n) if s < min_spread_n]
+    if flat:
+        raise ConfigurationError(
+            f"foot-force fit: the load on a foot must change by at least {min_spread_n:g} N "
+            f"(standard deviation) to tell its gain from its offset; received "
+            f"{', '.join(flat)}: {hint}")
 
 
 def static_foot_loads(feet_xy: np.ndarray, zmp_xy: np.ndarray, weight_n: float) -> np.ndarray:
