@@ -21,7 +21,10 @@ from actions.robot.bringup_check import (
 )
 from sim.bridge_config import BridgeConfig
 from sim.cli import main
+from sim.cli.check import run_check
+from sim.cli.parser import build_parser
 from sim.dds_bridge import DdsBridge
+from sim.state_framing import UNITREE_PYTHON_RATE_HZ
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import JOINT_NAMES, Go2Description
 from wbc.robot_io.dds.c_layout import LEVEL_FLAG_LOW, crc_ok, set_crc
@@ -180,8 +183,10 @@ def test_base_height_of_the_named_poses_and_a_tilted_imu():
     assert np.isnan(base_height(STANDING, np.zeros(4), DESCRIPTION))
 
 
-def test_check_against_the_bridge_exits_0_and_on_an_empty_domain_exits_4(tmp_path: Path):
-    bridge = DdsBridge(BridgeConfig(domain_id=DOMAIN_ID))
+def _check_against(tmp_path: Path, framing: str, rate_hz: float = 500.0
+                   ) -> tuple[int, str, dict]:
+    """``go2-wbc check --dds`` (1.5 s) against an in-process bridge framed as ``framing``."""
+    bridge = DdsBridge(BridgeConfig(domain_id=DOMAIN_ID, framing=framing, rate_hz=rate_hz))
     thread = threading.Thread(target=bridge.run, name="bridge")
     thread.start()
     out = io.StringIO()
@@ -190,26 +195,39 @@ def test_check_against_the_bridge_exits_0_and_on_an_empty_domain_exits_4(tmp_pat
         while not bridge.is_started:         # same topic at once is refused by Cyclone
             assert time.monotonic() < deadline, "the bridge did not start"
             time.sleep(0.01)
-        from sim.cli.check import run_check
-        from sim.cli.parser import build_parser
         args = build_parser().parse_args(
             ["check", "--dds", "--domain", str(DOMAIN_ID), "--seconds", "1.5", "--report",
-             str(tmp_path / "check.json")])
+             str(tmp_path / f"{framing}.json")])
         code = run_check(args, stream=out)
     finally:
         bridge.stop()
         thread.join(30.0)
         bridge.close()
-    text = out.getvalue()
+    return code, out.getvalue(), json.loads((tmp_path / f"{framing}.json").read_text())
+
+
+def test_check_against_the_bridge_exits_0_and_on_an_empty_domain_exits_4(tmp_path: Path):
+    code, text, report = _check_against(tmp_path, "go2")
     assert code == 0, text
     assert "framing   go2 (a GO2 or go2-wbc bridge)" in text
-    report = json.loads((tmp_path / "check.json").read_text())
     assert report["ok"] is True
     # The bridge's 500 Hz, or less when a loaded machine slows its thread (368 Hz seen).
     assert 300.0 < report["figures"]["rate_hz"] < 510.0
     assert report["figures"]["posture"] == "standing"
     assert main(["check", "--dds", "--domain", str((DOMAIN_ID + 31) % 233), "--seconds",
                  "0.5"]) == 4
+
+
+def test_check_against_the_unitree_python_peer_exits_0_naming_it(tmp_path: Path):
+    code, text, report = _check_against(tmp_path, "unitree-python", UNITREE_PYTHON_RATE_HZ)
+    assert code == 0, text
+    assert "framing   unitree-python (Unitree's Python simulator" in text
+    assert report["figures"]["rate_hz"] == pytest.approx(200.0, rel=0.1)
+    assert report["figures"]["foot_force_absent"] is True
+    # Limp until a first command, as theirs: the robot collapses from standing to lying.
+    assert report["figures"]["base_height_m"] < 0.25
+    assert ("  staleness limit: run --dds derives it from the rate at its start (100 ms at "
+            "200 Hz") in text
 
 
 def test_the_listener_refuses_a_bad_time_naming_it():
