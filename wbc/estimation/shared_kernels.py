@@ -127,7 +127,8 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
     [N], its count turned into newtons by the calibration in ``foot_cal``. A sensor at full
     scale (counts), non-finite, or (on a scheduled stance foot) repeating one reading for
     ``stuck_s`` [s] is distrusted until it has read changing, in-range values for
-    ``recover_s`` [s]; the schedule alone then decides for that foot.
+    ``recover_s`` [s]; the schedule alone then decides for that foot. Without foot sensors
+    (``use_force`` 0) their readings are not judged: the schedule decides every foot.
 
     The weight check: while at least three feet are scheduled to stand and every sensor is
     trusted, the calibrated forces must sum to between ``weight_low`` and ``weight_high``
@@ -149,7 +150,7 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
         scheduled = min(1.0, max(0.0, schedule[i] / full_force))
         if scheduled >= 1.0:
             standing += 1
-        if new:
+        if new and use_force:  # without foot sensors their readings mean nothing
             value = force_in[i]
             if not math.isfinite(value):
                 foot_reason[i] = FOOT_NON_FINITE
@@ -178,7 +179,7 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
                     foot_contact[i] = 1.0
                 elif newtons < force_off:
                     foot_contact[i] = 0.0
-        if foot_reason[i] != FOOT_OK:
+        if use_force and foot_reason[i] != FOOT_OK:
             flags |= FOOT_SENSOR | (foot_reason[i] << (FOOT_REASON_SHIFT + 2 * i))
             all_ok = False
     if new and use_force and all_ok and standing >= 3:
