@@ -202,12 +202,16 @@ class EpisodeSummary:
     max_base_tilt_deg: float
     max_torque_fraction: float
     max_torque_jump_nm: float
+    #: Ticks the controller's QP failed while the loop controlled the robot.
     qp_failures: int
     tick_median_us: float
     tick_p99_us: float
     tick_max_us: float
     real_time_factor: float
     fell: bool
+    #: Ticks the loop damped the motors without a trustworthy state (no QP ran:
+    #: :mod:`actions.robot.state_fallback`), not counted as QP failures.
+    no_state_ticks: int = 0
     #: The state estimate against the truth (all 0 when the controller read the truth):
     #: base linear velocity error [m/s], height error [mm], roll and pitch error [deg],
     #: horizontal drift [mm] and yaw drift [deg] since measuring began.
@@ -263,6 +267,7 @@ class EpisodeMetrics:
         self.max_torque_fraction = 0.0
         self.max_jump = 0.0
         self.failures = 0
+        self.no_state_ticks = 0
         self.tick_times: list[float] = []
         self.fell = False
         self.ticks = 0
@@ -272,7 +277,7 @@ class EpisodeMetrics:
 
     def record(self, out: ControlOutput, *, stance_legs: list[str],
                foot_error_m: float | None = None, holding: bool = False,
-               tick_time_s: float | None = None) -> None:
+               tick_time_s: float | None = None, controlling: bool = True) -> None:
         """Measure one tick.
 
         Args:
@@ -281,6 +286,8 @@ class EpisodeMetrics:
             foot_error_m: Raised-foot position error [m], when a foot tracks a target.
             holding: The raised foot is holding its target.
             tick_time_s: Wall time of the control tick [s] (defaults to its own timing).
+            controlling: The loop controlled the robot this tick; a safe command while it did
+                not (no trustworthy state) counts in ``no_state_ticks``, not as a QP failure.
         """
         sim = self.sim
         now = sim.time_s
@@ -316,7 +323,10 @@ class EpisodeMetrics:
          self.max_jump) = stats.tolist()
         self.ticks += 1
         if not out.ok:
-            self.failures += 1
+            if controlling:
+                self.failures += 1
+            else:
+                self.no_state_ticks += 1
         elapsed = tick_time_s if tick_time_s is not None else out.timings.get("total", 0.0)
         self.tick_times.append(elapsed)
 
@@ -344,7 +354,7 @@ class EpisodeMetrics:
             tick_median_us=float(np.median(times)), tick_p99_us=float(np.percentile(times, 99)),
             tick_max_us=float(np.max(times)),
             real_time_factor=duration / wall_time_s if wall_time_s > 0 else math.inf,
-            fell=self.fell,
+            fell=self.fell, no_state_ticks=self.no_state_ticks,
             **({} if self.estimate_errors is None else {
                 f"estimate_{k}": v for k, v in self.estimate_errors.summary().items()}),
         )

@@ -134,7 +134,8 @@ class MetricsHook:
             errors.record(loop.context.q, loop.context.v, *self._truth)
         self._truth = loop.true_state()
         self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
-                            holding=phase == PHASE_NAMES[LiftPhase.HOLDING])
+                            holding=phase == PHASE_NAMES[LiftPhase.HOLDING],
+                            controlling=loop.ready)
 
 
 def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None:

@@ -37,3 +37,18 @@ def test_a_fault_from_the_start_waits_then_the_high_five_succeeds(tmp_path, caps
                                                                                          abs=0.01))]
     metrics = report["metrics"]
     assert metrics["max_base_tilt_deg"] < 1.0 and metrics["raised_foot_rms_mm"] < 5.0
+
+
+def test_ticks_without_a_trustworthy_state_are_not_counted_as_qp_failures(tmp_path, capsys):
+    """A stream stale for 0.2 s in the hold: the goal ends ABORTED (exit 1); the metrics count
+    the damping tick apart, and no QP failed (before, it counted as one)."""
+    report = tmp_path / "report.json"
+    code = main(["high-five", "--sensor-fault", "stale,3.5,0.2", "--metrics", "--report",
+                 str(report)])
+    out = capsys.readouterr().out
+    metrics = json.loads(report.read_text())["metrics"]
+    assert code == 1, out
+    assert metrics["qp_failures"] == 0
+    # The metrics end with the goal, which the first damping tick aborts.
+    assert metrics["no_state_ticks"] == 1
+    assert "QP failures 0 (1 ticks damping without a trustworthy state)" in out

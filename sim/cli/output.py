@@ -46,7 +46,9 @@ def metrics_text(summary: EpisodeSummary, *, raised: bool, estimated: bool) -> s
     parts += [f"stance sliding max {s.stance_sliding_max_mm:.2f} mm",
               f"min CoM margin {s.min_com_margin_mm:.0f} mm",
               f"max tilt {s.max_base_tilt_deg:.1f} deg",
-              f"QP failures {s.qp_failures}",
+              f"QP failures {s.qp_failures}"
+              + (f" ({s.no_state_ticks} ticks damping without a trustworthy state)"
+                 if s.no_state_ticks else ""),
               f"tick median {s.tick_median_us:.0f} us (p99 {s.tick_p99_us:.0f} us)",
               f"real-time factor {s.real_time_factor:.2f}"]
     text = "metrics: " + "; ".join(parts)
