@@ -6,6 +6,8 @@ it learnt, and is abandoned (target back, calibration kept) when the state stops
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -33,15 +35,21 @@ def _loop(clock: FakeClock) -> tuple[ControlLoop, TestRobot]:
     return ControlLoop(robot, WholeBodyController(control_period_s=PERIOD_S)), robot
 
 
-@pytest.fixture(scope="module")
-def calibrated():
+def _calibrating() -> tuple[ControlLoop, TestRobot, Any, CalibrateWhenStanding, list[str]]:
+    """A started wall-clock loop with a 2 s calibration waiting for the robot to stand."""
     clock = FakeClock()
-    loop, _ = _loop(clock)
+    loop, robot = _loop(clock)
     rt = realtime(loop, clock)
     said: list[str] = []
     calibration = CalibrateWhenStanding(2.0, said.append)
     rt.callbacks.append(calibration)
     rt.start()
+    return loop, robot, rt, calibration, said
+
+
+@pytest.fixture(scope="module")
+def calibrated():
+    loop, _, rt, calibration, said = _calibrating()
     tick_until(rt, lambda: calibration.routine is not None, "the calibration to start", 50)
     during = loop.client("high_five").send_goal_async(HighFiveGoal(target_height=0.3))
     rt.tick()
@@ -70,13 +78,7 @@ def test_goals_are_refused_while_it_runs_and_accepted_after(calibrated):
 
 
 def test_lost_state_abandons_it_and_puts_the_target_back():
-    clock = FakeClock()
-    loop, robot = _loop(clock)
-    rt = realtime(loop, clock)
-    said: list[str] = []
-    calibration = CalibrateWhenStanding(2.0, said.append)
-    rt.callbacks.append(calibration)
-    rt.start()
+    loop, robot, rt, calibration, said = _calibrating()
     target = loop.controller.com_target.copy()
     before = loop.estimator.foot_calibration
     tick_until(rt, lambda: calibration.routine is not None, "the calibration to start", 50)

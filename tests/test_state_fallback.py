@@ -19,6 +19,7 @@ from actions.robot.state_fallback import (
 )
 from sim.control_loop import ControlLoop
 from sim.sensor_faults import SensorFault
+from tests.test_robustness import torque_beyond_limits
 from wbc.controller.control_output import ControlStatus
 from wbc.core.errors import ConfigurationError
 
@@ -161,17 +162,7 @@ def test_a_recovery_stand_that_fails_is_sent_again():
     (first,) = loop.runner.active_goals()
     # One tick whose command a driver would refuse (the guard's safe command): the stand,
     # which aborts on a controller fault, ends ABORTED.
-    step = loop.controller.step
-
-    def wild(q, v):
-        out = step(q, v)
-        out.tau_ff = out.tau_ff.copy()
-        out.tau_ff[4] = 1e3
-        return out
-
-    loop.controller.step = wild
-    loop.spin_once()
-    loop.controller.step = step
+    torque_beyond_limits(loop, 1)
     loop.spin_for(0.005)
     assert first.status is GoalStatus.ABORTED
     assert loop.fallback.mode is LoopMode.RECOVERING

@@ -136,12 +136,7 @@ class FootForceFit:
     """
 
     def __init__(self, *, min_spread_n: float = 2.0, min_samples: int = 10):
-        self.min_spread_n = as_float("min_spread_n", min_spread_n, low=0.0, high=1e4,
-                                     low_inclusive=False)
-        if isinstance(min_samples, bool) or not isinstance(min_samples, int) or min_samples < 3:
-            raise ConfigurationError(
-                f"min_samples: expected a whole number >= 3, received {min_samples!r}")
-        self.min_samples = min_samples
+        self.min_spread_n, self.min_samples = _fit_settings(min_spread_n, min_samples)
         self.clear()
 
     def clear(self) -> None:
@@ -230,12 +225,7 @@ class WeightShiftFit:
 
     def __init__(self, weight_n: float, *, min_spread_n: float = 2.0, min_samples: int = 10):
         self.weight_n = as_float("weight_n", weight_n, low=0.0, high=1e5, low_inclusive=False)
-        self.min_spread_n = as_float("min_spread_n", min_spread_n, low=0.0, high=1e4,
-                                     low_inclusive=False)
-        if isinstance(min_samples, bool) or not isinstance(min_samples, int) or min_samples < 3:
-            raise ConfigurationError(
-                f"min_samples: expected a whole number >= 3, received {min_samples!r}")
-        self.min_samples = min_samples
+        self.min_spread_n, self.min_samples = _fit_settings(min_spread_n, min_samples)
         self.samples = 0
         self.phase_deg = math.nan  # the last fit's turn of the centre of pressure
         self._feet = np.zeros((len(LEGS), 2))
@@ -324,6 +314,15 @@ class WeightShiftFit:
         mean_loads = static_foot_loads(feet, origin[:2] + z_mean, self.weight_n)
         offset = origin[2:] + c_mean - gain * mean_loads
         return FootForceCalibration(offset=tuple(offset), gain=tuple(gain), source=source)
+
+
+def _fit_settings(min_spread_n: float, min_samples: int) -> tuple[float, int]:
+    """A fit's least load spread [N] and fewest samples, checked (the field named)."""
+    spread = as_float("min_spread_n", min_spread_n, low=0.0, high=1e4, low_inclusive=False)
+    if isinstance(min_samples, bool) or not isinstance(min_samples, int) or min_samples < 3:
+        raise ConfigurationError(
+            f"min_samples: expected a whole number >= 3, received {min_samples!r}")
+    return spread, min_samples
 
 
 def _check_fit_data(samples: int, min_samples: int, spread_n: np.ndarray,
