@@ -1,9 +1,5 @@
 """Acceleration-level tasks and QP constraints for whole-body control, with compiled kernels."""
 
-# The tasks' modules use wbc.core.errors and wbc.core.validation, and wbc's controller imports the
-# tasks: wbc is imported first, while no module here is half-imported, so that the
-# controller's imports of the tasks' modules complete.
-import wbc  # noqa: F401
 from tasks.base_orientation_task import BaseOrientationTask
 from tasks.com_task import ComTask
 from tasks.constraint import Constraint, ConstraintBlock, Elimination

@@ -93,3 +93,35 @@ def test_a_module_imports_first_in_a_fresh_interpreter(module):
     done = subprocess.run([sys.executable, "-c", f"import {module}"], cwd=ROOT,
                           capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stderr
+
+
+def test_the_wbc_facade_types_and_loads_the_same_names():
+    """``wbc`` loads its public names on first use from a table; the imports that type checkers
+    read must name the same ones from the same modules."""
+    import ast
+
+    import wbc
+
+    tree = ast.parse((ROOT / "wbc" / "__init__.py").read_text())
+    typed = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING":
+            for statement in node.body:
+                assert isinstance(statement, ast.ImportFrom)
+                typed.update({alias.name: statement.module for alias in statement.names})
+    assert typed == wbc._HOMES
+    assert sorted(wbc.__all__) == sorted(typed)
+    for name in wbc.__all__:
+        assert getattr(wbc, name) is not None
+
+
+def test_tasks_and_wbc_import_in_either_order_without_a_fix():
+    """The tasks' facade imports nothing from ``wbc`` to fix an order: importing a leaf of
+    ``wbc`` does not load the controller."""
+    source = (ROOT / "tasks" / "__init__.py").read_text()
+    assert "import wbc\n" not in source and "import wbc  #" not in source
+    probe = ("import sys, wbc.core.errors; "
+             "assert 'wbc.controller.whole_body_controller' not in sys.modules; import tasks")
+    done = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
