@@ -13,8 +13,6 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
-from cyclonedds.util import duration
 
 from sim.bridge_stats import BridgeStats
 from wbc.robot_io.dds.cdr_codec import FrameError
@@ -23,6 +21,7 @@ from wbc.robot_io.dds.low_cmd_conversion import (
     motor_command_from_low_cmd,
     sdk_command_from_low_cmd,
 )
+from wbc.robot_io.dds.robot_end import RobotEnd
 from wbc.robot_io.motor_command import MotorCommand
 
 #: Samples the ``rt/lowcmd`` reader holds and a physics step takes at most: 16 ms of commands
@@ -37,7 +36,8 @@ class CommandIntake:
     to ``reject(reason, message)``.
 
     Args:
-        reader: The ``rt/lowcmd`` DataReader (keeping :data:`COMMAND_HISTORY` samples).
+        wire: The robot's end of the topics, its ``rt/lowcmd`` reader keeping
+            :data:`COMMAND_HISTORY` samples.
         stats: The bridge's counters.
         slots: For each plant motor, its ``motor_cmd`` slot (the SDK's order).
         to_plant: Description order to plant order, by joint name.
@@ -46,10 +46,10 @@ class CommandIntake:
         reject: Called with the reason and the message of each dropped command.
     """
 
-    def __init__(self, reader: Any, stats: BridgeStats, *, slots: np.ndarray,
+    def __init__(self, wire: RobotEnd, stats: BridgeStats, *, slots: np.ndarray,
                  to_plant: np.ndarray, joint_names: tuple[str, ...], effort_limit: np.ndarray,
                  reject: Callable[[str, str], None]):
-        self._reader = reader
+        self._wire = wire
         self.stats = stats
         self._slots = slots
         self._to_plant = to_plant
@@ -59,20 +59,12 @@ class CommandIntake:
         # What arrived since the last step: (arrival [s], samples, or the FrameError of
         # bytes that did not decode).
         self._arrived: list[tuple[float, list[Any] | FrameError]] = []
-        self._waitset: WaitSet | None = None
-        self._condition: ReadCondition | None = None
 
     def wait_until(self, deadline_s: float, clock: Callable[[], float]) -> None:
         """Wait until ``deadline_s`` on ``clock`` [s], taking each command as it arrives
         (stamped with ``clock``); :meth:`take` checks and counts them at the next step."""
-        if self._waitset is None:
-            self._waitset = WaitSet(self._reader.participant)
-            self._condition = ReadCondition(
-                self._reader, SampleState.Any | ViewState.Any | InstanceState.Any)
-            self._waitset.attach(self._condition)
         while (remaining := deadline_s - clock()) > 0.0:
-            self._waitset.wait(duration(seconds=remaining))
-            if self._condition.triggered:
+            if self._wire.wait_for_command(remaining):
                 self._arrived.append((clock(), self._take_pending()))
 
     def take(self, now_s: float) -> MotorCommand | None:
@@ -101,14 +93,9 @@ class CommandIntake:
                                   info.source_timestamp, received_s=received_s)
         return newest
 
-    def entities(self) -> tuple[Any, ...]:
-        """The DDS entities it made (to delete before the reader): the wait's condition and
-        waitset, once :meth:`wait_until` made them."""
-        return tuple(e for e in (self._condition, self._waitset) if e is not None)
-
     def _take_pending(self) -> list[Any] | FrameError:
         try:
-            return self._reader.take(N=COMMAND_HISTORY)
+            return self._wire.take_commands()
         except FrameError as err:
             return err
 

@@ -7,7 +7,8 @@ the MuJoCo GO2 unchanged::
     bridge.run(duration_s=10.0)        # or: start(), step() ... , close()
     bridge.close()
 
-The wire, as the robot has it:
+The wire, as the robot has it (its topics, QoS, reader and writers: the robot's end of the pair,
+:class:`wbc.robot_io.dds.robot_end.RobotEnd`):
 
 - ``rt/lowstate`` (``LowState_``) at ``rate_hz`` from the simulated sensors
   (:class:`sim.sensors.SimulatedSensors`: noise, biases, the IMU's attitude filter), never
@@ -28,7 +29,7 @@ The wire, as the robot has it:
   Slots 0 to 11 are mapped to the plant's motors by joint name; the plant's actuators are in
   the SDK's order, as the messages are. What the drivers apply, before the first command
   and when commands stop, is :class:`sim.command_slot.CommandSlot`'s.
-- ``rt/wbc/sim/truth`` (:class:`sim.sim_truth.SimTruth`): the exact state, one sample per
+- ``rt/wbc/sim/truth`` (:class:`wbc.robot_io.dds.sim_truth.SimTruth`): the exact state, one sample per
   ``LowState_`` with its tick (or the bridge's count), for evaluation only.
 - ``config.framing`` other than ``go2``: states framed, and commands applied, as Unitree's
   C++ or Python simulator does (:mod:`sim.state_framing`): test peers of the project's own.
@@ -52,11 +53,6 @@ from dataclasses import asdict
 from typing import Any
 
 import numpy as np
-from cyclonedds.core import Policy, Qos
-from cyclonedds.pub import DataWriter
-from cyclonedds.sub import DataReader
-from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
 from actions.robot.idle_collector import IdleCollector
 from sim.bridge_config import BridgeConfig
@@ -64,7 +60,7 @@ from sim.bridge_stats import BridgeStats
 from sim.command_intake import COMMAND_HISTORY, CommandIntake
 from sim.command_slot import COMMAND, DAMPING, DAMPING_KD, STAND_KD, STAND_KP, CommandSlot
 from sim.sensors import SimulatedSensors
-from sim.sim_truth import SIM_TRUTH_TOPIC, SimTruthMessage, sim_truth_record
+from sim.sim_truth import sim_truth_record
 from sim.simulator import Go2Simulator
 from sim.state_framing import UNITREE_PYTHON, StateFraming, StateGaps
 from sim.truth_log import TruthLog
@@ -72,10 +68,11 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float
 from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES
 from wbc.robot_io.dds.c_layout import LOW_STATE_DTYPE, zero_record
-from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
 from wbc.robot_io.dds.low_state_conversion import low_state_from_sensor_record
-from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
+from wbc.robot_io.dds.robot_end import RobotEnd
+from wbc.robot_io.dds.sim_truth import SIM_TRUTH_TOPIC, SimTruthMessage
+from wbc.robot_io.dds.wire_message import LowStateMessage
 from wbc.robot_io.sensor_record import SensorRecord
 
 #: Physics steps the loop may fall behind the clock before it resynchronises (an overrun).
@@ -156,8 +153,7 @@ class DdsBridge:
         self._state_message = LowStateMessage(self._state)
         self._truth_message = SimTruthMessage()
         self._rejected_reasons: set[str] = set()
-        self._dds: DomainHandle | None = None
-        self._entities: tuple[Any, ...] = ()
+        self._wire: RobotEnd | None = None
         self._view: Any = None
         self._stop = threading.Event()
         self._closed = False
@@ -173,7 +169,7 @@ class DdsBridge:
     @property
     def is_started(self) -> bool:
         """Whether :meth:`start` was called and :meth:`close` was not."""
-        return self._dds is not None
+        return self._wire is not None
 
     def start(self) -> None:
         """Join the domain, make the writers and the reader, open the viewer; idempotent.
@@ -183,35 +179,16 @@ class DdsBridge:
                 process, refused by Cyclone) or the bridge is closed.
         """
         with self._lock:
-            if self._dds is not None:
+            if self._wire is not None:
                 return
             if self._closed:
                 raise ConfigurationError("start: the bridge is closed; make a new one")
-            dds = join_domain(self.config.interface, domain_id=self.config.domain_id)
-            try:
-                participant = dds.participant
-                # unitree_sdk2's channels: writers Reliable (100 ms) KeepLast 1, readers
-                # BestEffort (a Reliable writer matches both kinds of reader); the command
-                # reader keeps a few, to count every command (the module docstring).
-                writer_qos = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
-                                 Policy.History.KeepLast(1))
-                reader_qos = Qos(Policy.Reliability.BestEffort,
-                                 Policy.History.KeepLast(COMMAND_HISTORY))
-                self._cmd_reader = DataReader(
-                    participant, _topic(participant, LOW_CMD_TOPIC, LowCmdMessage),
-                    qos=reader_qos)
-                self._state_writer = DataWriter(
-                    participant, _topic(participant, LOW_STATE_TOPIC, LowStateMessage),
-                    qos=writer_qos)
-                self._truth_writer = DataWriter(
-                    participant, _topic(participant, SIM_TRUTH_TOPIC, SimTruthMessage),
-                    qos=writer_qos)
-            except Exception:  # nothing left behind
-                dds.close()
-                raise
-            self._dds = dds
-            self._entities = (self._cmd_reader, self._state_writer, self._truth_writer)
-            self._intake = CommandIntake(self._cmd_reader, self.stats, slots=self._slots,
+            # unitree_sdk2's channels; the command reader keeps a few, to count every
+            # command (the module docstring).
+            self._wire = RobotEnd(domain_id=self.config.domain_id,
+                                  interface=self.config.interface,
+                                  command_depth=COMMAND_HISTORY)
+            self._intake = CommandIntake(self._wire, self.stats, slots=self._slots,
                                          to_plant=self._to_plant,
                                          joint_names=self._joint_names,
                                          effort_limit=self.sim.effort_limit,
@@ -233,12 +210,10 @@ class DdsBridge:
             view, self._view = self._view, None
             if view is not None:
                 view.close()
-            dds, self._dds = self._dds, None
-            entities, self._entities = self._entities, ()
-            if dds is not None:
+            wire, self._wire = self._wire, None
+            if wire is not None:
                 self._intake.count_pending()
-                delete_entities(*self._intake.entities(), *entities)
-                dds.close()
+                wire.close()
 
     def __enter__(self) -> DdsBridge:
         return self
@@ -293,11 +268,12 @@ class DdsBridge:
             NonFiniteError: The simulation diverged.
         """
         with self._lock:
-            if self._dds is None:
+            wire = self._wire
+            if wire is None:
                 raise ConfigurationError("step: the bridge is not started (start() it first) "
                                          "or is closed")
             if self.steps % self.config.steps_per_state == 0:
-                self._publish()
+                self._publish(wire)
             now = self._clock()
             newest = self.framing.applied(self._intake.take(now), self.sim)
             command = self.slot.update(newest, now_s=now)
@@ -315,13 +291,13 @@ class DdsBridge:
 
     # ------------------------------------------------------------------ inside
 
-    def _publish(self) -> None:
+    def _publish(self, wire: RobotEnd) -> None:
         """Sample the sensors, write ``LowState_``, then the truth (in a gap: see StateGaps)."""
         gap = "" if self.gaps is None else self.gaps.at_state(
             self.steps * self.config.physics_timestep_s)
         if gap:
             if gap == "frozen":
-                self._state_writer.write(self._state_message)
+                wire.write_state(self._state_message)
             return
         self.tick += 1
         raw, sensor = self._raw, self._sensor
@@ -339,11 +315,11 @@ class DdsBridge:
         self.framing.frame(self._state, sim_time_s=self.sim.time_s)
         # Stamped before the write: a reply can arrive while write() is still returning.
         written_s, written_ns = self._clock(), time.time_ns()
-        self._state_writer.write(self._state_message)
+        wire.write_state(self._state_message)
         tick = self.framing.state_tick(self._state, self.tick)  # what a reply echoes
         self.stats.published(tick, written_s, written_ns)
         truth = sim_truth_record(self.sim, tick, out=self._truth_message.record)
-        self._truth_writer.write(self._truth_message)
+        wire.write_truth(self._truth_message)
         if self.truth_log is not None:
             self.truth_log.append(truth)
 
@@ -394,7 +370,3 @@ class DdsBridge:
             "gc": self.collector.report(),
         }
 
-
-def _topic(participant: Any, name: str, data_type: Any) -> Topic[Any]:
-    """A topic of a wire-message type (cyclonedds' hints know only ``IdlStruct`` types)."""
-    return Topic(participant, name, data_type)

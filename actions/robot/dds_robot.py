@@ -1,6 +1,9 @@
 """A GO2 (or its simulator) on DDS as a :class:`~actions.robot.robot_interface.RobotInterface`:
 ``rt/lowstate`` in, ``rt/lowcmd`` out, the way unitree_sdk2 talks to the robot.
 
+The wire (topics, QoS, reader and writer) is the controller's end of the pair,
+:class:`~wbc.robot_io.dds.controller_end.ControllerEnd`; this class gives its frames meaning.
+
 State: a BestEffort, KeepLast 1 reader (unitree_sdk2's), taken without blocking once a control
 period. The reader holds only the newest ``LowState_``; :meth:`DdsRobot.read_sensors` returns it
 once (``None`` when nothing new came: never a queue of stale states). Every frame goes through
@@ -32,32 +35,17 @@ names the problem. A command written while no reader of ``rt/lowcmd`` is matched
 
 from __future__ import annotations
 
-import atexit
 import logging
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from cyclonedds.core import (
-    InstanceState,
-    Policy,
-    Qos,
-    ReadCondition,
-    SampleState,
-    ViewState,
-    WaitSet,
-)
-from cyclonedds.pub import DataWriter
-from cyclonedds.sub import DataReader
-from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.model.description import JOINT_NAMES, LEGS
-from wbc.robot_io.dds.domain_config import delete_entities, join_domain
+from wbc.robot_io.dds.controller_end import ControllerEnd
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
 from wbc.robot_io.dds.low_cmd_conversion import (
     low_cmd_fault,
@@ -67,30 +55,19 @@ from wbc.robot_io.dds.low_cmd_conversion import (
 from wbc.robot_io.dds.low_cmd_frame import LowCmdFrame
 from wbc.robot_io.dds.low_state_conversion import sensor_record_from_low_state
 from wbc.robot_io.dds.low_state_stream import RATE_SAMPLES, LowStateStream
-from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
+from wbc.robot_io.dds.wire_message import LowCmdMessage
 from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.sdk_motor_command import SdkMotorCommand
 from wbc.robot_io.sensor_record import SensorRecord
 
 logger = logging.getLogger(__name__)
 
-#: unitree_sdk2's writer: Reliable (blocking at most 100 ms), KeepLast 1.
-COMMAND_QOS = Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
-                  Policy.History.KeepLast(1))
-#: unitree_sdk2's reader: BestEffort, KeepLast 1 (only the newest state is held).
-STATE_QOS = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1))
-_TAKE_MAX = 8  # KeepLast 1 holds one; more only if a writer of another instance appeared
 #: Longest wait [s] for the robot's command reader after its first state (discovery on one
 #: host matches both ways within milliseconds).
 MATCH_WAIT_S = 1.0
 #: Longest listening [s] after the first state to decide the stream's kind and measure its
 #: rate on ``RATE_SAMPLES`` new states (0.1 s at 500 Hz, 0.25 s at 200 Hz).
 MEASURE_WAIT_S = 1.0
-
-
-def _topic(participant: Any, name: str, data_type: Any) -> Topic[Any]:
-    """A topic of a wire-message type (cyclonedds' type hints know only ``IdlStruct``)."""
-    return Topic(participant, name, data_type)
 
 
 class NoRobotStateError(WbcError, TimeoutError):
@@ -142,7 +119,7 @@ class DdsRobot:
     Example:
         >>> robot = DdsRobot(domain_id=1, interface="lo")
         >>> robot.wait_for_first_state(5.0); print(robot.stream.describe())
-        >>> loop = ControlLoop(robot, WholeBodyController(control_period_s=0.002))
+        >>> loop = ControlLoop(robot, WholeBodyController(solver={"control_period_s": 0.002}))
     """
 
     joint_names: tuple[str, ...] = JOINT_NAMES
@@ -167,25 +144,9 @@ class DdsRobot:
         self._cmd_record = self._frame.record
         self._cmd_message = LowCmdMessage(self._cmd_record)
         self._built = False  # a command was built into the record
-        self._lock = threading.Lock()
-        self._dds = join_domain(interface, domain_id=domain_id)
-        self._writer: DataWriter | None = None
-        try:
-            participant = self._dds.participant
-            self._state_topic = _topic(participant, LOW_STATE_TOPIC, LowStateMessage)
-            self._reader = DataReader(participant, self._state_topic, qos=STATE_QOS)
-            self._cmd_topic = None
-            if not self.dry_run:
-                self._cmd_topic = _topic(participant, LOW_CMD_TOPIC, LowCmdMessage)
-                self._writer = DataWriter(participant, self._cmd_topic, qos=COMMAND_QOS)
-            self._waitset = WaitSet(participant)
-            self._condition = ReadCondition(
-                self._reader, SampleState.Any | ViewState.Any | InstanceState.Any)
-            self._waitset.attach(self._condition)
-        except BaseException:
-            self._dds.close()
-            raise
-        atexit.register(self.close)  # readers go before the interpreter does
+        #: The wire: ``rt/lowstate`` read, ``rt/lowcmd`` written (no writer in a dry run).
+        self.wire = ControllerEnd(domain_id=domain_id, interface=interface,
+                                  write_commands=not self.dry_run)
 
     # -- RobotInterface ---------------------------------------------------------------------
 
@@ -256,12 +217,8 @@ class DdsRobot:
                 not self._build_checked(command)):
             return
         self._built = True
-        with self._lock:
-            writer = self._writer
-            if writer is not None:
-                if not writer.get_publication_matched_status().current_count:
-                    self.counters.commands_unmatched += 1
-                writer.write(self._cmd_message)
+        if not self.wire.write_command(self._cmd_message):
+            self.counters.commands_unmatched += 1
         self.counters.commands_sent += 1
 
     # -- start-up and teardown --------------------------------------------------------------
@@ -297,16 +254,12 @@ class DdsRobot:
             remaining = deadline - time.monotonic()
             if remaining <= 0.0:
                 raise NoRobotStateError(self._no_state_message(timeout_s))
-            self._waitset.wait(duration(seconds=min(remaining, 0.05)))
+            self.wire.wait_for_state(min(remaining, 0.05))
 
     def wait_for_new_state(self, timeout_s: float) -> bool:
         """Whether a state not yet read is waiting in the reader, waiting for one at most
         ``timeout_s`` [s]; nothing is taken (a frame that turns out bad counts as one)."""
-        if self._pending is not None or self._condition.triggered:
-            return True
-        if timeout_s > 0.0:
-            self._waitset.wait(duration(seconds=timeout_s))
-        return bool(self._condition.triggered)
+        return self._pending is not None or self.wire.wait_for_state(timeout_s)
 
     def stats(self) -> dict[str, Any]:
         """The counters as a dict, and the stream's kind, rate and counters under
@@ -315,13 +268,7 @@ class DdsRobot:
 
     def close(self) -> None:
         """Delete the reader and writer and leave the domain; idempotent."""
-        atexit.unregister(self.close)
-        with self._lock:
-            if self._dds.is_closed:
-                return
-            writer, self._writer = self._writer, None
-            delete_entities(self._waitset, self._condition, self._reader, writer)
-            self._dds.close()
+        self.wire.close()
 
     def __enter__(self) -> DdsRobot:
         return self
@@ -351,28 +298,19 @@ class DdsRobot:
 
     def _wait_for_command_reader(self, timeout_s: float) -> None:
         """Wait until a reader of ``rt/lowcmd`` is matched, at most ``timeout_s`` [s]."""
-        writer = self._writer
-        if writer is None:
-            return
-        deadline = time.monotonic() + timeout_s
-        while not writer.get_publication_matched_status().current_count:
-            if time.monotonic() >= deadline:
-                logger.warning("DdsRobot: no reader of %s matched %g s after the first state; "
-                               "commands go nowhere until one is (counted in "
-                               "commands_unmatched)", LOW_CMD_TOPIC, timeout_s)
-                return
-            time.sleep(1e-3)
+        if not self.wire.wait_for_command_reader(timeout_s):
+            logger.warning("DdsRobot: no reader of %s matched %g s after the first state; "
+                           "commands go nowhere until one is (counted in "
+                           "commands_unmatched)", LOW_CMD_TOPIC, timeout_s)
 
     def _take_newest(self) -> np.ndarray | None:
         """The newest new state in the reader (or the one a wait took), without blocking;
         every frame taken is judged by :attr:`stream` (counted, dropped with its reason)."""
         newest, self._pending = self._pending, None
         stream, now = self.stream, self._clock()
-        for sample in self._reader.take(_TAKE_MAX):
-            if not sample.sample_info.valid_data:
-                continue  # a writer went away: an instance state change, no data
-            if stream.accept(sample.record, now):
-                newest = sample.record
+        for record in self.wire.take_states():
+            if stream.accept(record, now):
+                newest = record
         counters, seen = self.counters, stream.counters
         if counters.bad_frames != seen.dropped:
             self.last_fault = stream.last_fault
@@ -387,7 +325,7 @@ class DdsRobot:
         self.last_fault = reason
 
     def _no_state_message(self, timeout_s: float) -> str:
-        publishers = self._reader.get_subscription_matched_status().current_count
+        publishers = self.wire.state_writers_matched()
         seen = (f"{publishers} publisher(s) of {LOW_STATE_TOPIC} matched but sent no valid "
                 f"state" if publishers else f"no publisher of {LOW_STATE_TOPIC} matched")
         if self.counters.bad_frames:

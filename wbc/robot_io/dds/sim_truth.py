@@ -1,4 +1,5 @@
-"""The simulator's exact state on its own DDS topic, ``rt/wbc/sim/truth``: :class:`SimTruth`.
+"""The wire type of the simulator's exact state, on its own DDS topic ``rt/wbc/sim/truth``:
+:class:`SimTruth` (filled from the simulator by :func:`sim.sim_truth.sim_truth_record`).
 
 An evaluation topic: ``go2-wbc bridge`` publishes one sample with each ``LowState_`` (same
 ``tick``), for a measuring tool or a test to compare what a controller estimated and did
@@ -31,18 +32,13 @@ for the bridge's hot path, holding a :data:`SIM_TRUTH_DTYPE` record::
 # No `from __future__ import annotations`: cyclonedds resolves the field types from the real
 # annotation objects.
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import cyclonedds.idl.types as t
 import numpy as np
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.annotations import autoid, final
 
-from wbc.robot_io.dds.c_layout import check_record, zero_record
 from wbc.robot_io.dds.wire_message import WireMessage
-
-if TYPE_CHECKING:
-    from sim.simulator import Go2Simulator
 
 #: The topic the bridge publishes the exact state on.
 SIM_TRUTH_TOPIC = "rt/wbc/sim/truth"
@@ -77,30 +73,3 @@ class SimTruthMessage(WireMessage):
     idl_type = SimTruth
     dtype = SIM_TRUTH_DTYPE
     __slots__ = ()
-
-
-def sim_truth_record(sim: "Go2Simulator", tick: int, *,
-                     out: np.ndarray | None = None) -> np.ndarray:
-    """The :data:`SIM_TRUTH_DTYPE` record of the simulator's state now.
-
-    Args:
-        sim: The simulator.
-        tick: The ``LowState_.tick`` it goes with (wraps at 2^32 like it).
-        out: A record to fill in place; a new one when not given.
-
-    Raises:
-        ConfigurationError: ``out`` is not a :data:`SIM_TRUTH_DTYPE` record.
-        NonFiniteError: The simulation diverged (:meth:`Go2Simulator.state`).
-    """
-    if out is None:
-        out = zero_record(SIM_TRUTH_DTYPE)
-    else:
-        check_record(out, SIM_TRUTH_DTYPE, "out")
-    q, v = sim.state()
-    out["tick"] = tick % (1 << 32)
-    out["t_s"] = sim.time_s
-    out["q"] = q
-    out["v"] = v
-    out["foot_position_m"] = sim.foot_position_array()
-    out["foot_force_n"] = sim.foot_normal_forces()
-    return out
