@@ -243,9 +243,9 @@ def run_recorded(*, hold_s: float, timing: LegLiftTiming | None) -> dict[str, An
     rows = {}
     for name, factory in ((DEFAULT, WholeBodyController),
                           ("daqp-hot (reduced QP)",
-                           lambda: WholeBodyController(backend="daqp-hot")),
+                           lambda: WholeBodyController(solver={"backend": "daqp-hot"})),
                           ("daqp (full QP)",
-                           lambda: WholeBodyController(eliminate_dynamics=False)),
+                           lambda: WholeBodyController(solver={"eliminate_dynamics": False})),
                           (PLACO, PlacoController)):
         rows[name] = replay(recording, factory, hold_s=hold_s, timing=timing)
     return {"ticks": len(recording.t), "rows": rows}

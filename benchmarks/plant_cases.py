@@ -11,6 +11,7 @@ from sim.episode import Episode, episode_default
 from sim.plant import Plant
 from sim.sensor_faults import SensorFault
 from sim.sensor_model import SensorModel
+from wbc.controller.controller_config import ControllerConfig
 
 
 def _default_plant() -> Plant:
@@ -60,7 +61,8 @@ class PlantCase:
             height_m, hold_s: The goal.
             seed: Seed of the sensors' noise and biases.
             pushes: Pushes whose ``at_s`` counts from the goal's start [s].
-            gains: :class:`wbc.ControllerConfig` fields of the controller.
+            gains: :class:`wbc.ControllerConfig` parameters of the controller by their bare
+                names (a sweep file's ``gains``: ``swing_kp``, not ``shaping.swing_kp``).
             run: More :class:`sim.episode.Episode` fields (``after_s``, ``timeout_s``...).
         """
         start_s = episode_default("settle_s")  # the goal is sent when the settle ends
@@ -72,7 +74,8 @@ class PlantCase:
             command_delay_s=self.delay_ticks * self.control_period_s,
             sensor_faults=tuple(replace(f, at_s=f.at_s + start_s) for f in self.sensor_faults),
             pushes=tuple(replace(p, at_s=p.at_s + start_s) for p in pushes),
-            controller_params=gains or (), **run)
+            controller_params={ControllerConfig.path_of(name): value
+                               for name, value in (gains or {}).items()}, **run)
 
 
 MENAGERIE = Plant.preset("menagerie")

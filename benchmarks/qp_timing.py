@@ -121,10 +121,10 @@ def _finite_or_none(value: float) -> float | None:
 
 def _controllers() -> list[tuple[str, Callable[[], BalanceController]]]:
     makers: list[tuple[str, Callable[[], BalanceController]]] = [
-        (f"{DEFAULT} ({ControllerConfig().backend})", WholeBodyController),
-        ("daqp, full QP", lambda: WholeBodyController(eliminate_dynamics=False))]
+        (f"{DEFAULT} ({ControllerConfig().solver.backend})", WholeBodyController),
+        ("daqp, full QP", lambda: WholeBodyController(solver={"eliminate_dynamics": False}))]
     for name in available_backends():
-        makers.append((name, lambda name=name: WholeBodyController(backend=name)))
+        makers.append((name, lambda name=name: WholeBodyController(solver={"backend": name})))
     makers.append((PLACO, PlacoController))
     return makers
 

@@ -177,7 +177,7 @@ def make_loop(case: PlantCase = NOMINAL_CASE, *, seed: int = 0,
     shift = faults_from_s - SETTLE_S  # the case's episode starts its faults at SETTLE_S
     faults = tuple(dataclasses.replace(f, at_s=f.at_s + shift) for f in episode.sensor_faults)
     return build_loop(episode.replace(sensor_faults=faults), controller or WholeBodyController(
-        control_period_s=case.control_period_s))
+        solver={"control_period_s": case.control_period_s}))
 
 
 def run_high_five(case: PlantCase = NOMINAL_CASE, *, pushes: Sequence[Push] = (),
@@ -246,14 +246,15 @@ def run_episode(case: PlantCase = NOMINAL_CASE, *, push: Push | None = None,
         hold_s: The goal's hold [s]. height_m: Its foot height [m].
         seed: Seed of the sensors' noise and biases.
         measure: Add the tracking, sliding and QP-failure metrics to the row.
-        gains: :class:`wbc.ControllerConfig` fields for the controller (checked there); the
-            default controller when empty.
+        gains: :class:`wbc.ControllerConfig` parameters for the controller by their bare
+            names, as a sweep file's ``gains`` (checked there); the default controller when
+            empty.
     """
     episode = high_five_episode(case, push=push, hold_s=hold_s, height_m=height_m, seed=seed,
                                 gains=gains)
     controller = None
     if gains:
-        controller = WholeBodyController(control_period_s=case.control_period_s, **gains)
+        controller = WholeBodyController(episode.controller_config)
     return measured_high_five(episode, measure=measure, controller=controller).row()
 
 

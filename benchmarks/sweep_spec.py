@@ -65,7 +65,7 @@ from sim.disturbances import Push
 from sim.episode import Episode, episode_default
 from sim.plant import Plant
 from sim.sensor_model import SensorModel
-from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.controller_config import PARTS, ControllerConfig
 from wbc.core.errors import WbcError
 
 # ---------------------------------------------------------------------------- the spec
@@ -288,8 +288,10 @@ class EpisodeSpec:
             ConfigurationError: The plant or controller parameters do not go together.
         """
         case = self.plant_case()
-        config = ControllerConfig(control_period_s=case.control_period_s,
-                                  **self.section("gains"))
+        parts: dict[str, dict[str, Any]] = {"solver": {"control_period_s": case.control_period_s}}
+        for name, value in self.section("gains").items():  # a sweep file names them bare
+            parts.setdefault(ControllerConfig.path_of(name).split(".")[0], {})[name] = value
+        config = ControllerConfig(**parts)
         push = self.push()
         episode = self.episode()
         return {
@@ -300,8 +302,8 @@ class EpisodeSpec:
             "delay_ticks": case.delay_ticks,
             "sensors": {**case.sensor_model().as_dict(), "state": case.state},
             "control_period_s": case.control_period_s,
-            "controller": {f.name: getattr(config, f.name)
-                           for f in dataclasses.fields(ControllerConfig)},
+            "controller": {f.name: getattr(getattr(config, part), f.name)
+                           for part, kind in PARTS for f in dataclasses.fields(kind)},
             "episode": {"settle_s": episode.settle_s, "after_s": episode.after_s,
                         "timeout_s": episode.timeout_s},
         }

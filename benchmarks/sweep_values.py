@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 from collections.abc import Mapping
@@ -19,7 +18,7 @@ from sim.mujoco_robot import physics_steps_per_period
 from sim.plant import PLANT_PRESETS, Plant
 from sim.sensor_model import SENSOR_PRESETS, SensorModel
 from wbc.backends.backend import available_backends
-from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.controller_config import PARTS, PATHS, ControllerConfig, ShapingSettings
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.core.validation import as_float
 from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
@@ -34,7 +33,7 @@ DIRECTIONS, IMPULSES = "pushes.directions_deg", "pushes.impulses_ns"
 #: Loop fields of the ``plant`` section (:class:`benchmarks.robustness.PlantCase`).
 CASE_FIELDS = ("delay_ticks", "control_period_s")
 #: Fields given three numbers (one value of theirs is a list).
-VECTOR_FIELDS = ("payload_offset_m", *ControllerConfig.PER_JOINT_TYPE)
+VECTOR_FIELDS = ("payload_offset_m", *ShapingSettings.PER_JOINT_TYPE)
 
 #: The top-level fields and their defaults (robustness's high five, the default seed).
 TOP_FIELDS = {"height_m": robustness.HEIGHT_M, "hold_s": robustness.HOLD_S,
@@ -58,8 +57,7 @@ def valid_names(section: str) -> tuple[str, ...]:
         return ("preset", *Plant.parameter_names(), *CASE_FIELDS)
     if section == "sensors":
         return ("preset", "state", *SensorModel.parameter_names())
-    return tuple(f.name for f in dataclasses.fields(ControllerConfig)
-                 if f.name != "control_period_s")
+    return tuple(path.split(".")[1] for path in PATHS if path != "solver.control_period_s")
 
 
 def _kind(path: str) -> str:
@@ -209,7 +207,8 @@ def check_value(path: str, value: Any) -> None:
                 raise SweepSpecError(f"{path}: unknown or uninstalled QP backend {value!r}; "
                                      f"installed: {', '.join(available_backends())}")
         elif section == "gains":
-            ControllerConfig(**{name: value})
+            part = dict(PARTS)[ControllerConfig.path_of(name).split(".")[0]]
+            part(**{name: value})  # a sweep file's gains are named bare: the message too
     except SweepSpecError:
         raise
     except WbcError as err:

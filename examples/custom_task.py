@@ -54,9 +54,9 @@ def run(*, raise_m: float = 0.04, ramp_s: float = 1.0, settle_s: float = 1.0,
     true_start = float(loop.true_state()[0][2])
     height.set_target(start)
     failures, violation = 0, 0.0
-    ticks = round((ramp_s + settle_s) / controller.config.control_period_s)
+    ticks = round((ramp_s + settle_s) / controller.control_period_s)
     for k in range(ticks):
-        t = k * controller.config.control_period_s
+        t = k * controller.control_period_s
         s = min(t / ramp_s, 1.0)
         # A smooth (cubic) ramp of the target, with its velocity.
         height.set_target(start + raise_m * (3 * s**2 - 2 * s**3),

@@ -28,7 +28,7 @@ def run(*, height_m: float = 0.30, hold_s: float = 0.5) -> dict[str, float]:
     returns the highest the foot went [m], the ticks, and how many were not OK."""
     description = Go2Description.default()
     controller = WholeBodyController()                  # 1 kHz, DAQP, the default gains
-    dt = controller.config.control_period_s
+    dt = controller.control_period_s
     q = description.pose("standing")                    # your robot's state: q (19,) ...
     v = np.zeros(18)                                    # ... and v (18,)
     controller.reset(q, v)                              # hold this state, four feet down

@@ -93,8 +93,8 @@ class ControlLoop(RobotLoop):
             robot = FaultyRobot(robot, sensor_faults,
                                 foot_full_scale=plant_robot.sensors.model.foot_force_full_scale)
         if controller is None:
-            controller = WholeBodyController(control_period_s=control_period_s)
-        period = getattr(getattr(controller, "config", None), "control_period_s", None)
+            controller = WholeBodyController(solver={"control_period_s": control_period_s})
+        period = getattr(controller, "control_period_s", None)  # the BalanceController protocol's
         if period is not None and abs(period - control_period_s) > 1e-12:
             raise ConfigurationError(
                 f"control_period_s: the controller is configured for {period:g} s, the loop "

@@ -93,7 +93,8 @@ class Episode:
         command_delay_s: Time [s] between a command and the motor drivers applying it, a
             whole number of control periods, at most :data:`MAX_DELAY_TICKS` of them.
         sensor_faults: Sensor faults, their times on the simulated clock [s].
-        controller_params: :class:`wbc.ControllerConfig` fields of the default controller.
+        controller_params: Parameters of the default controller by their paths in
+            :class:`wbc.ControllerConfig` (``("gains.com_kp", 200.0)``).
         start_pose: The pose the robot starts in (:data:`START_POSES`).
         settle_s: Sim time [s] the robot stands before the goal is sent (the plant spawns
             without contact forces; its feet settle in the first 20 ms).
@@ -164,10 +165,7 @@ class Episode:
         self._check_delay()
         set_(self, "sensor_faults", _items("sensor_faults", self.sensor_faults, SensorFault))
         if self.controller_params:
-            from wbc.controller.controller_config import ControllerConfig
-
-            _checked("controller_params", lambda: ControllerConfig(
-                control_period_s=self.control_period_s, **dict(self.controller_params)))
+            _checked("controller_params", lambda: self.controller_config)
         _checked("start_pose", lambda: check_name("start pose", self.start_pose, START_POSES))
         _checked("settle_s", lambda: as_float("settle_s", self.settle_s, low=0.0, high=3600.0))
         _checked("calibrate_s", lambda: as_float("calibrate_s", self.calibrate_s, low=0.0,
@@ -233,6 +231,15 @@ class Episode:
     def command_delay_ticks(self) -> int:
         """The command delay in control periods."""
         return round(self.command_delay_s / self.control_period_s)
+
+    @property
+    def controller_config(self) -> Any:
+        """The default controller's :class:`wbc.ControllerConfig`: the episode's control
+        period and :attr:`controller_params`."""
+        from wbc.controller.controller_config import ControllerConfig
+
+        return ControllerConfig(solver={"control_period_s": self.control_period_s}).with_values(
+            dict(self.controller_params))
 
     def make_estimator(self) -> Any:
         """A new state estimator of :attr:`estimator` with :attr:`estimator_params`."""

@@ -47,8 +47,7 @@ def build_loop(episode: Episode, controller: BalanceController | None = None) ->
     from wbc.controller.whole_body_controller import WholeBodyController
 
     if controller is None:
-        controller = WholeBodyController(control_period_s=episode.control_period_s,
-                                         **dict(episode.controller_params))
+        controller = WholeBodyController(episode.controller_config)
     return ControlLoop.simulated(
         pose=episode.start_pose, plant=episode.plant_model,
         control_period_s=episode.control_period_s, physics_timestep_s=episode.timestep_s,

@@ -108,7 +108,7 @@ class SceneOverlay:
       trace since the foot left the ground.
 
     Everything comes from the loop's public state: the centre of mass, the support legs and
-    the feet from ``loop.controller``, the margin from its ``config.support_margin_m``, the
+    the feet from ``loop.controller``, the margin from its ``config.contacts.support_margin_m``, the
     commanded forces from ``loop.last_output.forces``, the measured ones from ``loop.sim``,
     a swing foot's target from the controller's foot task. The geoms are decor: they take no
     part in the physics and cast no shadow.
@@ -208,7 +208,8 @@ class SceneOverlay:
         for a, b in zip(ring, np.roll(ring, -1, axis=0)):
             connect(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, POLYGON_RGBA, 0.006, a, b)
             triangle(scene, POLYGON_FILL_RGBA, centre, a, b)
-        margin = float(getattr(getattr(controller, "config", None), "support_margin_m", 0.0))
+        contacts = getattr(getattr(controller, "config", None), "contacts", None)
+        margin = float(getattr(contacts, "support_margin_m", 0.0))
         inner = SupportPolygon(margin_m=margin).inset(corners)
         if inner is not None:
             inner_ring = on_floor(inner, z=FLOOR_Z + 0.001)

@@ -20,7 +20,7 @@ def tick(loop: ControlLoop) -> ControlOutput:
 
 
 def settle(loop: ControlLoop, seconds: float) -> None:
-    for _ in range(round(seconds / loop.controller.config.control_period_s)):
+    for _ in range(round(seconds / loop.controller.control_period_s)):
         tick(loop)
 
 

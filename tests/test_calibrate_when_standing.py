@@ -32,7 +32,7 @@ def _loop(clock: FakeClock) -> tuple[ControlLoop, TestRobot]:
     sim.reset("standing")
     plant.sensors.reset()
     robot = TestRobot(plant, clock)
-    return ControlLoop(robot, WholeBodyController(control_period_s=PERIOD_S)), robot
+    return ControlLoop(robot, WholeBodyController(solver={"control_period_s": PERIOD_S})), robot
 
 
 def _calibrating() -> tuple[ControlLoop, TestRobot, Any, CalibrateWhenStanding, list[str]]:

@@ -110,7 +110,7 @@ class _ComAccelerationAtLeast(Constraint):
 
 @pytest.mark.parametrize("eliminate", [True, False])
 def test_a_user_constraint_binds_in_the_reduced_and_the_full_qp(description, eliminate):
-    controller = WholeBodyController(eliminate_dynamics=eliminate)
+    controller = WholeBodyController(solver={"eliminate_dynamics": eliminate})
     q = description.pose("standing")
     controller.reset(q)
     free = controller.step(q, np.zeros(18))

@@ -371,7 +371,7 @@ def sim_loop(clock: FakeClock | None = None, pose: str = "standing"
     sim.reset(pose)
     plant.sensors.reset()
     robot = TestRobot(plant, clock)
-    return ControlLoop(robot, WholeBodyController(control_period_s=PERIOD_S)), robot, plant
+    return ControlLoop(robot, WholeBodyController(solver={"control_period_s": PERIOD_S})), robot, plant
 
 
 def realtime(loop: ControlLoop, clock: FakeClock, **kwargs) -> RealtimeLoop:
@@ -621,7 +621,7 @@ def test_a_high_five_over_dds_against_the_simulator_bridge_succeeds(tmp_path):
     try:
         robot = DdsRobot(domain_id=BRIDGE_DOMAIN, interface="lo")
         robot.wait_for_first_state(120.0)  # the bridge loads MuJoCo and compiles first
-        loop = ControlLoop(robot, WholeBodyController(control_period_s=PERIOD_S))
+        loop = ControlLoop(robot, WholeBodyController(solver={"control_period_s": PERIOD_S}))
         action_bridge = DdsActionBridge(loop, domain_id=BRIDGE_DOMAIN, interface="lo")
         rt = RealtimeLoop(loop, rate_hz=500, bridge=action_bridge)
         client = DdsActionClient(HIGH_FIVE, "high_five", domain_id=BRIDGE_DOMAIN,
@@ -700,7 +700,7 @@ def paced_loop(*, period_s: float, first_s: float) -> tuple[RealtimeLoop, PacedR
     plant.sensors.reset()
     robot = PacedRobot(plant, clock, period_s=period_s, first_s=first_s)
     robot.next_s -= period_s  # the loop is built from the state before
-    loop = ControlLoop(robot, WholeBodyController(control_period_s=PERIOD_S))
+    loop = ControlLoop(robot, WholeBodyController(solver={"control_period_s": PERIOD_S}))
     return realtime(loop, clock), robot
 
 

@@ -299,7 +299,7 @@ def test_the_loop_gives_the_estimator_its_staleness_limit():
     plant = MujocoRobot(sim, control_period_s=0.002, sensor_seed=0)
     sim.reset("standing")
     plant.sensors.reset()
-    loop = ControlLoop(plant, WholeBodyController(control_period_s=0.002),
+    loop = ControlLoop(plant, WholeBodyController(solver={"control_period_s": 0.002}),
                        estimator=make_estimator(control_period_s=0.002))
     assert loop.estimator.config.trust_timeout_s == 0.01
     rt = RealtimeLoop(loop, rate_hz=500, stale_after_s=0.1)

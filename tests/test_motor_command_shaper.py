@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wbc import WholeBodyController
-from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.controller_config import ControllerConfig, ShapingSettings
 from wbc.controller.motor_command_shaper import MotorCommandShaper, joint_types
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import JOINT_NAMES, Go2Description
@@ -13,7 +13,7 @@ from wbc.model.description import JOINT_NAMES, Go2Description
 def shaper(**overrides) -> MotorCommandShaper:
     description = Go2Description()
     effort = description.effort_limit
-    return MotorCommandShaper(ControllerConfig(**overrides).shaping, control_period_s=1e-3,
+    return MotorCommandShaper(ShapingSettings(**overrides), control_period_s=1e-3,
                               tau_max=0.9 * effort, effort_limit=effort,
                               joint_types=joint_types(JOINT_NAMES))
 
@@ -56,15 +56,15 @@ def test_controller_output_is_a_motor_command_with_swing_gains_on_a_raised_leg(d
     controller = WholeBodyController()
     controller.reset(standing)
     out = controller.step(standing, np.zeros(18))
-    assert out.ok and (out.kp == controller.config.stance_kp).all()
+    assert out.ok and (out.kp == controller.config.shaping.stance_kp).all()
     np.testing.assert_allclose(out.tau, out.clipped_torque_at(
         standing[7:], np.zeros(12), controller.description.effort_limit))
     controller.schedule.set_max_normal_force("FR", 0.0)
     controller.schedule.set_swing("FR")
     out = controller.step(standing, np.zeros(18))
     fr = [i for i, name in enumerate(JOINT_NAMES) if name.startswith("FR")]
-    assert (out.kp[fr] == controller.config.swing_kp).all()
-    assert (out.kd[fr] == controller.config.swing_kd).all()
+    assert (out.kp[fr] == controller.config.shaping.swing_kp).all()
+    assert (out.kd[fr] == controller.config.shaping.swing_kd).all()
 
 
 @pytest.mark.parametrize(("field", "value", "message"), [
@@ -77,4 +77,4 @@ def test_controller_output_is_a_motor_command_with_swing_gains_on_a_raised_leg(d
 ])
 def test_gains_and_known_friction_are_validated(field, value, message):
     with pytest.raises(ConfigurationError, match=message):
-        ControllerConfig(**{field: value})
+        ControllerConfig(shaping={field: value})

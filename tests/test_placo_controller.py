@@ -88,7 +88,7 @@ def test_swing_and_stance_switch_the_contact(standing):
     controller.step(q, v)
     controller.schedule.set_max_normal_force("FR", 0.0)
     assert controller.contacts["FR"].weight_forces == pytest.approx(
-        controller.config.force_weight * 1e6)
+        controller.config.weights.force_weight * 1e6)
     controller.schedule.set_swing("FR")
     assert controller.stance_legs == ["FL", "RL", "RR"]
     assert not controller.contacts["FR"].active
@@ -136,7 +136,7 @@ def test_posture_and_foot_weights(standing):
 def test_unknown_and_bad_parameters_are_named_as_the_default_controller_names_them():
     with pytest.raises(ConfigurationError, match=r"^unknown controller parameter\(s\) "
                                                  r"\['com_gain', 'wieght'\]; valid controller "
-                                                 r"parameters: backend, "):
+                                                 r"parameters: solver, gains, "):
         PlacoController(com_gain=1.0, wieght=2.0)
     with pytest.raises(ConfigurationError, match=r"^stance_kp: .*\[0, 500\], received 900"):
-        PlacoController(stance_kp=900.0)
+        PlacoController(shaping={"stance_kp": 900.0})

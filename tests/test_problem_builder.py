@@ -167,8 +167,8 @@ def test_a_force_task_on_a_foot_in_the_air_changes_nothing(standing):
 
 @pytest.mark.parametrize("eliminate", [True, False])
 def test_a_force_task_moves_the_load_onto_its_foot(standing, eliminate):
-    free = WholeBodyController(eliminate_dynamics=eliminate)
-    pulled = WholeBodyController(eliminate_dynamics=eliminate)
+    free = WholeBodyController(solver={"eliminate_dynamics": eliminate})
+    pulled = WholeBodyController(solver={"eliminate_dynamics": eliminate})
     task = pulled.add_task(ContactForceTask("FR", weight=1.0, target_n=[0.0, 0.0, 60.0]))
     task.set_row_weights([0.0, 0.0, 1.0])   # the normal force only
     for c in (free, pulled):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import io
 import json
 import math
@@ -28,7 +27,7 @@ from sim import cli
 from sim.control_loop import ControlLoop
 from sim.mujoco_robot import MujocoRobot
 from sim.simulator import Go2Simulator
-from wbc.controller.controller_config import ControllerConfig
+from wbc.controller.controller_config import PATHS, ControllerConfig, ShapingSettings
 from wbc.core.conventions import mujoco_to_pin, pin_to_mujoco, reorder_quaternion
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import JOINT_NAMES, LEGS, Go2Description
@@ -216,7 +215,7 @@ def test_follow_joint_trajectory_goal_is_accepted_or_rejected_with_its_code(loop
 
 # ---------------------------------------------------------------------------- controller parameters
 
-CONFIG_FIELDS = [f.name for f in dataclasses.fields(ControllerConfig)]
+CONFIG_FIELDS = [path.split(".")[1] for path in PATHS]
 _DEFAULTS = ControllerConfig()
 
 
@@ -224,7 +223,7 @@ def config_value_is_valid(name: str, value) -> bool:
     """The documented ranges of ControllerConfig, with the other fields at their defaults."""
     if name == "backend":
         return isinstance(value, str) and value != ""
-    if name in ControllerConfig.PER_JOINT_TYPE:  # (hip, thigh, calf), each in [0, 10]
+    if name in ShapingSettings.PER_JOINT_TYPE:  # (hip, thigh, calf), each in [0, 10]
         return (isinstance(value, tuple) and len(value) == 3
                 and all(math.isfinite(v) and 0.0 <= v <= 10.0 for v in value))
     if isinstance(value, tuple):
@@ -242,8 +241,8 @@ def config_value_is_valid(name: str, value) -> bool:
             "control_period_s": 1e-4 <= value <= 0.01,
             "stance_kp": value <= 500.0, "swing_kp": value <= 500.0,
             "stance_kd": value <= 50.0, "swing_kd": value <= 50.0,
-            "min_normal_force_n": value < _DEFAULTS.max_normal_force_n,
-            "max_normal_force_n": value > _DEFAULTS.min_normal_force_n}.get(name, True)
+            "min_normal_force_n": value < _DEFAULTS.contacts.max_normal_force_n,
+            "max_normal_force_n": value > _DEFAULTS.contacts.min_normal_force_n}.get(name, True)
 
 
 @SETTINGS
@@ -252,8 +251,9 @@ def config_value_is_valid(name: str, value) -> bool:
                        st.floats(0.0, 1.0), st.floats(0.0, 1e3),
                        st.tuples(st.floats(-1.0, 12.0), st.floats(0.0, 1.0), st.floats(0.0, 2.0))))
 def test_controller_config_field_is_valid_or_a_configuration_error_naming_it(name, value):
+    part = ControllerConfig.path_of(name).split(".")[0]
     try:
-        config = ControllerConfig(**{name: value})
+        config = ControllerConfig(**{part: {name: value}})
         event("valid")
     except ConfigurationError as err:  # any other exception type fails the test
         event("ConfigurationError")
@@ -261,7 +261,7 @@ def test_controller_config_field_is_valid_or_a_configuration_error_naming_it(nam
         assert str(err).startswith(f"{name}:") or f" {name} " in str(err), str(err)
         return
     assert config_value_is_valid(name, value)
-    assert getattr(config, name) == value
+    assert getattr(getattr(config, part), name) == value
 
 
 # ---------------------------------------------------------------------------- CLI arguments
@@ -482,7 +482,7 @@ def test_a_plant_in_any_actuator_order_is_seen_in_the_description_order(order, t
 
 def test_controller_config_with_an_int_too_large_for_a_float():
     with pytest.raises(ConfigurationError, match="^com_kp: "):
-        ControllerConfig(com_kp=10**400)
+        ControllerConfig(gains={"com_kp": 10**400})
 
 
 def test_high_five_goal_with_an_int_too_large_for_a_float():

@@ -108,7 +108,7 @@ def test_task_costs_match_the_dense_formula(model, standing):
     f -= entry.rate_weights * entry.x_prev
     tau_rows = entry.tau_block.A
     offset = c.kinematics.nonlinear_effects[6:] - builder.tau_prev
-    w = c.config.torque_rate_weight
+    w = c.config.weights.torque_rate_weight
     H += w * tau_rows.T @ tau_rows
     f += w * tau_rows.T @ offset
     np.testing.assert_allclose(full.H, H, atol=1e-9)

@@ -108,7 +108,8 @@ def test_standing_60_s_on_the_estimate_drifts_less_than_1_cm():
 
 def test_pure_torque_control_loses_balance_on_menagerie_joints():
     """Why the motor command: the same controller with zero driver gains (bare torques)."""
-    bare_torques = WholeBodyController(stance_kp=0.0, stance_kd=0.0, swing_kp=0.0, swing_kd=0.0)
+    bare_torques = WholeBodyController(
+        shaping={"stance_kp": 0.0, "stance_kd": 0.0, "swing_kp": 0.0, "swing_kd": 0.0})
     episode = run_high_five(PlantCase(), hold_s=2, height_m=0.40, controller=bare_torques)
     assert episode.status is GoalStatus.ABORTED
     assert episode.max_tilt_deg > 10.0  # the balance watch put the foot down
@@ -142,8 +143,8 @@ def test_known_friction_compensation_on_the_identified_plant():
     blind = run_high_five(PlantCase("calf 1.4", plant), hold_s=2, height_m=0.40)
     informed = run_high_five(
         PlantCase("calf 1.4", plant), hold_s=2, height_m=0.40,
-        controller=WholeBodyController(known_joint_damping=(0.2, 0.2, 0.2),
-                                       known_joint_friction=(0.25, 0.2, 1.4)))
+        controller=WholeBodyController(shaping={"known_joint_damping": (0.2, 0.2, 0.2),
+                                                "known_joint_friction": (0.25, 0.2, 1.4)}))
     for episode in (blind, informed):
         assert episode.status is GoalStatus.SUCCEEDED, episode.message
         assert episode.max_tilt_deg <= 3.0

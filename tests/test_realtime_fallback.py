@@ -27,7 +27,7 @@ def test_a_wall_clock_loop_without_state_at_start_waits_then_stands_the_robot_up
     plant.sensors.reset()
     robot = TestRobot(plant, clock)
     robot.dropping = True
-    loop = ControlLoop(robot, WholeBodyController(control_period_s=PERIOD_S))
+    loop = ControlLoop(robot, WholeBodyController(solver={"control_period_s": PERIOD_S}))
     assert loop.fallback.mode is LoopMode.WAITING and not loop.ready
     rt = realtime(loop, clock)
     rt.start()

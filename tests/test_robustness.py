@@ -276,7 +276,7 @@ def still_after(loop: ControlLoop, seconds: float) -> tuple[float, float]:
 @pytest.mark.parametrize("fault", FAULTS)
 def test_fault_during_the_hold_aborts_safely_and_the_robot_recovers(fault, failing_backend):
     inject, ticks, statuses, message, state = FAULTS[fault]
-    controller = WholeBodyController(backend=failing_backend)
+    controller = WholeBodyController(solver={"backend": failing_backend})
     loop = make_loop(PlantCase(state=state), controller=controller)
     log = StatusLog()
     loop.hooks.append(log)

@@ -177,7 +177,7 @@ def test_every_overlay_is_in_the_rendered_frame(raising, frames):
                                                              min_saturation=0.25)
     corners = np.array([feet[leg] for leg in ("FL", "RL", "RR")])
     corners[:, 2] = 0.003
-    inset = SupportPolygon(margin_m=controller.config.support_margin_m).inset(corners)
+    inset = SupportPolygon(margin_m=controller.config.contacts.support_margin_m).inset(corners)
     inner = np.column_stack([inset, np.full(3, 0.004)])
     margin = hue_mask(frame, MARGIN_RGBA)
     along = np.linspace(0.2, 0.8, 7)[:, None]

@@ -42,7 +42,7 @@ def test_the_log_holds_what_the_estimator_read(logged):
     assert np.all(np.diff(ticks[np.isfinite(ticks)]) >= 1)
     schedule = log.arrays["contact_schedule"]
     fr = 1
-    full = WholeBodyController().config.max_normal_force_n
+    full = WholeBodyController().config.contacts.max_normal_force_n
     assert schedule[:, fr].min() == 0.0 and schedule[0, fr] == full  # FR swung: its bound 0
 
 

@@ -12,6 +12,7 @@ from tests.conftest import random_configuration
 from wbc import ControllerConfig, WholeBodyController
 from wbc.backends import available_backends
 from wbc.controller.control_output import ControlStatus
+from wbc.controller.controller_config import PARTS
 from wbc.core.errors import ConfigurationError, NonFiniteError, ReachabilityError, UnknownNameError
 from wbc.model.description import FOOT_RADIUS_M, LEGS
 
@@ -51,7 +52,7 @@ def check_solution(c, q, v, out, swing=()):
     generalized = pin.rnea(model, data, q, v, qdd) - contact_jac.T @ forces.reshape(-1)
     np.testing.assert_allclose(generalized[:6], 0.0, atol=1e-6)
     np.testing.assert_allclose(generalized[6:], out.tau_ff, atol=1e-6)  # no friction model
-    mu = c.config.friction_coefficient
+    mu = c.config.contacts.friction_coefficient
     for i, leg in enumerate(LEGS):
         f = forces[i]
         if leg in swing:
@@ -59,17 +60,18 @@ def check_solution(c, q, v, out, swing=()):
             continue
         rows = slice(3 * i, 3 * i + 3)
         acc = contact_jac[rows] @ qdd + contact.drift[rows]
-        np.testing.assert_allclose(acc, -c.config.contact_damping * contact_jac[rows] @ v,
+        np.testing.assert_allclose(acc, -c.config.gains.contact_damping * contact_jac[rows] @ v,
                                    atol=1e-6)
         assert abs(f[0]) <= mu * f[2] + 1e-7 and abs(f[1]) <= mu * f[2] + 1e-7
-        assert c.config.min_normal_force_n - 1e-7 <= f[2] <= c.schedule.max_normal_force(leg) + 1e-7
+        low = c.config.contacts.min_normal_force_n
+        assert low - 1e-7 <= f[2] <= c.schedule.max_normal_force(leg) + 1e-7
     assert np.all(np.abs(out.tau_ff) <= c.tau_max + 1e-6)
 
 
 def test_one_line_construction_and_defaults():
     c = WholeBodyController()
-    assert c.config.backend == "daqp"
-    assert c.config.torque_limit_fraction == 0.9
+    assert c.config.solver.backend == "daqp"
+    assert c.config.limits.torque_limit_fraction == 0.9
     np.testing.assert_allclose(c.tau_max, 0.9 * c.description.effort_limit)
 
 
@@ -108,7 +110,7 @@ def test_non_finite_state_falls_back_and_recovers(controller, standing):
     assert out.message == "state: non-finite values at v[7]"
     assert np.all(np.isfinite(out.tau)) and np.all(np.abs(out.tau) <= controller.tau_max)
     np.testing.assert_allclose(out.tau, good.tau_ff, atol=1e-9)  # damping of finite v only
-    assert (out.kp == 0).all() and (out.kd == controller.config.fallback_damping).all()
+    assert (out.kp == 0).all() and (out.kd == controller.config.shaping.fallback_damping).all()
     assert controller.step(standing, np.zeros(18)).ok
 
 
@@ -119,7 +121,7 @@ def test_wrong_state_shape_falls_back(controller, standing):
 
 
 def test_infeasible_qp_names_the_group_and_commands_the_relaxed_solution(standing):
-    c = WholeBodyController(torque_limit_fraction=0.01)
+    c = WholeBodyController(limits={"torque_limit_fraction": 0.01})
     c.reset(standing)
     out = c.step(standing, np.zeros(18))
     assert out.status is ControlStatus.RELAXED
@@ -156,7 +158,7 @@ def test_fallback_damps_joint_velocity(controller, standing):
     q = standing.copy()
     q[0] = np.inf
     out = controller.step(q, v)
-    np.testing.assert_allclose(out.tau, np.clip(good - controller.config.fallback_damping,
+    np.testing.assert_allclose(out.tau, np.clip(good - controller.config.shaping.fallback_damping,
                                                  -controller.tau_max, controller.tau_max))
 
 
@@ -207,49 +209,54 @@ def test_foot_positions_are_the_feet_in_leg_order(controller, standing):
 def test_bad_parameters_are_named():
     with pytest.raises(ConfigurationError, match=r"^unknown controller parameter\(s\) "
                                                  r"\['friction', 'kp'\]; valid controller "
-                                                 r"parameters: backend, eliminate_dynamics, "):
+                                                 r"parameters: solver, gains, weights, "
+                                                 r"contacts, limits, shaping$"):
         WholeBodyController(friction="high", kp=1.0)
     with pytest.raises(UnknownNameError, match=r"^unknown controller parameter 'friction'; "
-                                               r"valid controller parameters: backend, "
-                                               r"eliminate_dynamics, .*, "
-                                               r"friction_velocity_scale_rad_s$"):
+                                               r"valid controller parameters: solver, gains, "
+                                               r"weights, contacts, limits, shaping$"):
         ControllerConfig(friction="high")  # not Python's bare TypeError
     with pytest.raises(UnknownNameError, match=r"^unknown controller parameter 'kp'"):
         replace(ControllerConfig(), kp=1.0)
     with pytest.raises(ConfigurationError,
                        match="friction_coefficient: expected a value in \\(0, 5\\], received 0"):
-        ControllerConfig(friction_coefficient=0.0)
+        ControllerConfig(contacts={"friction_coefficient": 0.0})
     with pytest.raises(ConfigurationError,
                        match="min_normal_force_n: expected less than max_normal_force_n"):
-        ControllerConfig(min_normal_force_n=300.0)
+        ControllerConfig(contacts={"min_normal_force_n": 300.0})
     with pytest.raises(UnknownNameError,
                        match="unknown backend 'gurobi'; installed backends: daqp"):
-        WholeBodyController(backend="gurobi")
+        WholeBodyController(solver={"backend": "gurobi"})
 
 
 def every_bad_value(config: ControllerConfig):
-    """``(field, value, range text)``: one value below and one above each numeric field's
-    range, a NaN and a string, for every numeric field."""
-    for f in fields(ControllerConfig):
+    """``(part, field, value, label, range text)``: one value below and one above each
+    numeric field's range, a NaN and a string, for every numeric field of every part."""
+    for part_name, part in PARTS:
+        yield from _bad_values(part_name, part)
+
+
+def _bad_values(part_name, part):
+    for f in fields(part):
         if f.name in ("backend", "eliminate_dynamics"):
             continue
-        low, high, inclusive = ControllerConfig.RANGES.get(f.name, (0.0, None, True))
+        low, high, inclusive = part.RANGES.get(f.name, (0.0, None, True))
         interval = f"{'[' if inclusive else '('}{low:g}, {'inf' if high is None else f'{high:g}'}]"
         bad = [low - 1.0 if inclusive else low, math.nan, "high"]
         if high is not None:
             bad.append(high * 2.0)
         for value in bad:
-            if f.name in ControllerConfig.PER_JOINT_TYPE:
-                yield f.name, (0.0, 0.0, value), f"{f.name} (calf)", interval
+            if f.name in part.PER_JOINT_TYPE:
+                yield part_name, f.name, (0.0, 0.0, value), f"{f.name} (calf)", interval
             else:
-                yield f.name, value, f.name, interval
+                yield part_name, f.name, value, f.name, interval
 
 
 def test_every_bad_value_names_the_field_and_its_range():
     checked = 0
-    for name, value, label, interval in every_bad_value(ControllerConfig()):
+    for part, name, value, label, interval in every_bad_value(ControllerConfig()):
         with pytest.raises(ConfigurationError) as err:
-            ControllerConfig(**{name: value})
+            ControllerConfig(**{part: {name: value}})
         assert str(err.value).startswith(f"{label}: expected a "), (name, value)
         assert f" {interval}, received " in str(err.value), (name, value, str(err.value))
         checked += 1
@@ -257,15 +264,15 @@ def test_every_bad_value_names_the_field_and_its_range():
     # A stance gain below its range used to report [0, inf], the range of the first check.
     with pytest.raises(ConfigurationError, match=r"^stance_kp: expected a value in \[0, 500\], "
                                                  r"received -1$"):
-        ControllerConfig(stance_kp=-1.0)
+        ControllerConfig(shaping={"stance_kp": -1.0})
     with pytest.raises(NonFiniteError, match=r"^com_kp: expected a finite number in \[0, inf\], "
                                              r"received nan$"):
-        ControllerConfig(com_kp=math.nan)
+        ControllerConfig(gains={"com_kp": math.nan})
     with pytest.raises(ConfigurationError, match=r"^backend: expected a backend name such as "
                                                  r"'daqp' \(wbc.backends.available_backends\(\)"):
-        ControllerConfig(backend=3)
+        ControllerConfig(solver={"backend": 3})
     with pytest.raises(ConfigurationError, match=r"^eliminate_dynamics: expected True or False"):
-        ControllerConfig(eliminate_dynamics=1)
+        ControllerConfig(solver={"eliminate_dynamics": 1})
 
 
 def test_contact_changes_are_validated(controller):
@@ -288,7 +295,7 @@ def test_contact_changes_are_validated(controller):
 @pytest.mark.parametrize("backend", [b for b in available_backends() if b != "daqp"])
 def test_backends_agree_with_daqp(backend, standing, model):
     reference = WholeBodyController()
-    other = WholeBodyController(backend=backend)
+    other = WholeBodyController(solver={"backend": backend})
     reference.reset(standing)
     other.reset(standing)
     for q, v in perturbed_states(model, standing, 3, seed=2):
@@ -352,7 +359,7 @@ def test_read_only_and_strided_states_are_taken(controller, standing):
 
 
 def test_torque_limits_changed_after_reset_also_bound_the_feed_forward(standing):
-    c = WholeBodyController(known_joint_friction=(5.0, 5.0, 5.0))  # pushes tau_ff up
+    c = WholeBodyController(shaping={"known_joint_friction": (5.0, 5.0, 5.0)})  # pushes tau_ff up
     c.reset(standing)
     c.tau_max = np.full(12, 4.0)
     v = np.zeros(18)

@@ -174,7 +174,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
                                    trust_timeout_s=stale_after_s, **params)
         say("feet: " + estimator.foot_calibration.describe()
             + ("" if estimator.config.use_foot_force else " (unused: use_foot_force=false)"))
-        loop = ControlLoop(robot, WholeBodyController(control_period_s=period_s),
+        loop = ControlLoop(robot, WholeBodyController(solver={"control_period_s": period_s}),
                            estimator=estimator)
         bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
         rt = RealtimeLoop(loop, rate_hz=args.control_rate, bridge=bridge,

@@ -108,7 +108,7 @@ class BalanceProblem:
         #: Stacks the registered tasks and constraints into the tick's QP.
         self.builder = ProblemBuilder(
             kinematics, self.contact_task, self.legs, leg_columns=leg_columns,
-            reduce=config.eliminate_dynamics,
+            reduce=config.solver.eliminate_dynamics,
             regularization=Regularization(
                 acceleration=weights.acceleration_weight, force=weights.force_weight,
                 acceleration_rate=weights.acceleration_rate_weight,
@@ -155,7 +155,7 @@ class BalanceProblem:
         self.posture_task.set_joint_weights(np.ones(self.posture_task.dim))
         for leg, task in self.foot_tasks.items():
             task.set_target(kin.frame_position[self._foot_rows[leg]])
-            task.set_weight(self.config.foot_weight)
+            task.set_weight(self.config.weights.foot_weight)
         self._base_integral[:] = 0.0
         self._support = None
         self._polygon_due = True
@@ -221,16 +221,16 @@ class BalanceProblem:
         # the base tilted when the proportional term alone needs less torque than it.
         # Only on every foot: with a foot up, a small tilt is the tasks' fair compromise,
         # and the integral would trade the raised foot's tracking for it; it then fades.
-        cfg = self.config
-        ki = cfg.base_orientation_ki
+        gains = self.config.gains
+        ki = gains.base_orientation_ki
         if ki:
             integral = self._base_integral
             if self.swing_legs or len(self._support or ()) < len(self.legs):
                 integral *= _INTEGRAL_FADE
             else:
-                integral += cfg.control_period_s * self.base_task.error
-                np.clip(integral, -cfg.base_orientation_integral_limit,
-                        cfg.base_orientation_integral_limit, out=integral)
+                integral += self.config.solver.control_period_s * self.base_task.error
+                np.clip(integral, -gains.base_orientation_integral_limit,
+                        gains.base_orientation_integral_limit, out=integral)
             np.multiply(ki, integral, out=self.base_task.bias)
 
     def hold_at_rest(self, q: np.ndarray) -> np.ndarray:

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
-from functools import cached_property
+from difflib import get_close_matches
 from typing import Any, ClassVar
 
 import numpy as np
 
-from wbc.core.errors import ConfigurationError, NonFiniteError
-from wbc.core.validation import as_float, known_fields_only
+from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
+from wbc.core.validation import as_float, check_name, known_fields_only
 
 #: ``(low, high, low_inclusive)`` ranges: ``[0, inf]``, that of every numeric field a part's
 #: ``RANGES`` does not name, and ``(0, inf]``.
@@ -32,17 +33,13 @@ class _Part:
 
     @classmethod
     def _check(cls, config: Any) -> None:
-        """Check the fields this part declares, on ``config`` (the part or a whole config)."""
+        """Check the fields of ``config``, one of this part."""
         for f in fields(cls):  # type: ignore[arg-type]
             if f.name in cls.PER_JOINT_TYPE:
                 _check_per_joint_type(config, f.name, cls.RANGES[f.name])
             else:
                 _in_range(f.name, getattr(config, f.name), cls.RANGES.get(f.name, _NON_NEGATIVE))
 
-    @classmethod
-    def of(cls, config: Any) -> Any:
-        """This part's values taken from ``config`` (the whole configuration)."""
-        return cls(**{f.name: getattr(config, f.name) for f in fields(cls)})  # type: ignore[arg-type]
 
 
 @known_fields_only("solver setting")
@@ -218,92 +215,143 @@ class ShapingSettings(_Part):
 PARTS: tuple[tuple[str, type[_Part]], ...] = (
     ("solver", SolverSettings), ("gains", TaskGains), ("weights", CostWeights),
     ("contacts", ContactSettings), ("limits", LimitSettings), ("shaping", ShapingSettings))
+_PART_TYPES: dict[str, type[_Part]] = dict(PARTS)
+#: Every parameter's path, ``part.field`` (``gains.com_kp``), in the parts' order.
+PATHS: tuple[str, ...] = tuple(f"{name}.{f.name}" for name, part in PARTS for f in fields(part))
+#: The part of each parameter, by its own name (for the edges that still read bare names and
+#: for errors that name a parameter's path).
+_PART_OF: dict[str, str] = {path.split(".")[1]: path.split(".")[0] for path in PATHS}
 
 
-@known_fields_only("controller parameter")
-@dataclass(frozen=True)
-class ControllerConfig(ShapingSettings, LimitSettings, ContactSettings, CostWeights, TaskGains,
-                       SolverSettings):
+@dataclass(frozen=True, init=False)
+class ControllerConfig:
     """Parameters of :class:`wbc.WholeBodyController`; defaults are tuned for the GO2.
 
-    It is made of parts, each the settings of one piece of the controller, which takes
-    only its part: :attr:`solver` (:class:`SolverSettings`), :attr:`gains`
+    One nested shape: a field per part, each the settings of one piece of the controller,
+    which takes only its part: :attr:`solver` (:class:`SolverSettings`), :attr:`gains`
     (:class:`TaskGains`), :attr:`weights` (:class:`CostWeights`), :attr:`contacts`
     (:class:`ContactSettings`, the contact schedule's), :attr:`limits`
     (:class:`LimitSettings`) and :attr:`shaping` (:class:`ShapingSettings`, the motor
-    command's). Each parameter is declared once, in its part; the config holds them under
-    their own names, one flat namespace (a part is a base class here for that reason only):
-    ``ControllerConfig(com_kp=200.0)``, ``config.com_kp``, the command line's and the sweep
-    files' parameter names, ``dataclasses.fields(ControllerConfig)``. Build one from parts
-    with :meth:`from_parts`.
+    command's). A parameter is read and written by its path: ``config.gains.com_kp``;
+    ``ControllerConfig(gains=TaskGains(com_kp=200.0))`` or, the others of the part kept at
+    their defaults, ``ControllerConfig(gains={"com_kp": 200.0})``;
+    ``config.with_values({"gains.com_kp": 200.0})`` (the command line's
+    ``--set controller.gains.com_kp=200``). :data:`PATHS` lists every path.
 
     Raises:
-        UnknownNameError: A keyword that is not a field (the message lists the fields).
-        ConfigurationError: A value of the wrong type or out of its range (the message names
-            the field and its range: :attr:`RANGES`, ``[0, inf]`` for the others).
+        UnknownNameError: A keyword that is not a part (the message lists the parts, or names
+            the path of a parameter given by its bare name: ``com_kp`` is ``gains.com_kp``).
+        ConfigurationError: A part of the wrong type, or a value of the wrong type or out of
+            its range (the message names the field and its range: the part's ``RANGES``,
+            ``[0, inf]`` for the others).
     """
 
-    PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ShapingSettings.PER_JOINT_TYPE
-    RANGES: ClassVar[dict[str, _Range]] = {
-        name: bounds for _, part in PARTS for name, bounds in part.RANGES.items()}
+    solver: SolverSettings
+    gains: TaskGains
+    weights: CostWeights
+    contacts: ContactSettings
+    limits: LimitSettings
+    shaping: ShapingSettings
 
-    def __post_init__(self) -> None:
-        for _, part in PARTS:
-            part._check(self)
+    def __init__(self, **parts: _Part | Mapping[str, Any]) -> None:
+        _check_part_names(parts, "controller parameter")
+        for name, part in PARTS:
+            object.__setattr__(self, name, _as_part(name, part, parts.get(name)))
 
-    @cached_property
-    def solver(self) -> SolverSettings:
-        """The backend, the QP's form and the control period."""
-        return SolverSettings.of(self)
-
-    @cached_property
-    def gains(self) -> TaskGains:
-        """The tasks' gains."""
-        return TaskGains.of(self)
-
-    @cached_property
-    def weights(self) -> CostWeights:
-        """The cost's weights."""
-        return CostWeights.of(self)
-
-    @cached_property
-    def contacts(self) -> ContactSettings:
-        """Friction, normal-force bounds, the support polygon."""
-        return ContactSettings.of(self)
-
-    @cached_property
-    def limits(self) -> LimitSettings:
-        """Torque and joint limits."""
-        return LimitSettings.of(self)
-
-    @cached_property
-    def shaping(self) -> ShapingSettings:
-        """The motor command's gains, bounds, leaks and known friction."""
-        return ShapingSettings.of(self)
-
-    @classmethod
-    def from_parts(cls, *, solver: SolverSettings | None = None, gains: TaskGains | None = None,
-                   weights: CostWeights | None = None, contacts: ContactSettings | None = None,
-                   limits: LimitSettings | None = None, shaping: ShapingSettings | None = None,
-                   **overrides: Any) -> ControllerConfig:
-        """A config of these parts (the defaults' for those not given), then ``overrides``
-        (flat names) changed: ``ControllerConfig.from_parts(gains=TaskGains(com_kp=200))``.
+    def with_parts(self, **parts: _Part | Mapping[str, Any]) -> ControllerConfig:
+        """This config with the parts given replaced: a part, or a mapping of some of its
+        fields (the others kept from this config):
+        ``config.with_parts(solver={"backend": "osqp"})``.
 
         Raises:
-            ConfigurationError: A part of the wrong type (named), or as the constructor.
+            UnknownNameError, ConfigurationError: As the constructor.
         """
-        given = {"solver": solver, "gains": gains, "weights": weights, "contacts": contacts,
-                 "limits": limits, "shaping": shaping}
-        values: dict[str, Any] = {}
-        for name, part in PARTS:
-            value = given[name]
-            if value is None:
-                continue
-            if not isinstance(value, part) or isinstance(value, ControllerConfig):
-                raise ConfigurationError(f"{name}: expected a {part.__name__}, received "
-                                         f"{type(value).__name__}")
-            values.update({f.name: getattr(value, f.name) for f in fields(part)})
-        return config_with_overrides(cls(**values), overrides)
+        _check_part_names(parts, "controller parameter")
+        merged: dict[str, Any] = {name: getattr(self, name) for name, _ in PARTS}
+        for name, value in parts.items():
+            merged[name] = (replace(merged[name], **value) if isinstance(value, Mapping)
+                            else value)
+        return ControllerConfig(**merged)
+
+    def with_values(self, values: Mapping[str, object]) -> ControllerConfig:
+        """This config with the parameters at these paths changed:
+        ``config.with_values({"gains.com_kp": 200.0, "solver.backend": "osqp"})``.
+
+        Raises:
+            UnknownNameError: Paths that are not parameters (every one named, with the
+                nearest path, the valid paths listed).
+            ConfigurationError: A value out of its range (the field and the range named).
+        """
+        unknown = [path for path in values if path not in PATHS]
+        if unknown:
+            raise UnknownNameError(unknown_paths_message(unknown))
+        per_part: dict[str, dict[str, object]] = {}
+        for path, value in values.items():
+            part, name = path.split(".")
+            per_part.setdefault(part, {})[name] = value
+        parts: dict[str, _Part] = {}
+        for part, changes in per_part.items():
+            try:
+                parts[part] = replace(getattr(self, part), **changes)
+            except ConfigurationError as err:  # named by its path, as it was given
+                raise type(err)(f"{part}.{err}") from err
+        return self.with_parts(**parts)
+
+    @staticmethod
+    def path_of(name: str) -> str:
+        """The path (``"gains.com_kp"``) of a parameter given by its bare name (``"com_kp"``),
+        for the edges whose files name parameters so (a sweep file's ``gains`` section).
+
+        Raises:
+            UnknownNameError: No parameter of that name (the nearest and the valid ones).
+        """
+        if name not in _PART_OF:
+            raise UnknownNameError(
+                f"unknown controller parameter {name!r}{_nearest(name, list(_PART_OF))}; "
+                f"valid controller parameters: {', '.join(_PART_OF)}")
+        return f"{_PART_OF[name]}.{name}"
+
+
+def unknown_paths_message(unknown: list[str]) -> str:
+    """The error for paths that are not the controller's parameters: each named with its
+    nearest path (or the path of a bare name), then every valid path."""
+    named = "; ".join(f"{path!r}{_nearest(path, PATHS)}" for path in unknown)
+    return (f"unknown controller parameter(s) {named}; valid controller parameters: "
+            f"{', '.join(PATHS)}")
+
+
+def _nearest(name: str, valid: Any) -> str:
+    """`` (did you mean 'x'?)`` for the closest valid name, the path of a bare name."""
+    if name in _PART_OF:
+        return f" (it is {_PART_OF[name]}.{name})"
+    close = get_close_matches(name, list(valid), n=1, cutoff=0.6)
+    bare = [path for path in valid if path.endswith(f".{name.rsplit('.', 1)[-1]}")]
+    guess = bare[0] if bare else (close[0] if close else None)
+    return f" (did you mean {guess!r}?)" if guess else ""
+
+
+def _check_part_names(parts: Mapping[str, object], kind: str) -> None:
+    """Every key of ``parts`` a part's name (the first other named); a bare parameter name
+    gets its path named."""
+    for key in parts:
+        if key in _PART_OF:
+            raise UnknownNameError(
+                f"{key}: the controller's parameters are nested; it is "
+                f"{_PART_OF[key]}.{key} ({_PART_OF[key]}={{{key!r}: ...}} in Python, "
+                f"--set controller.{_PART_OF[key]}.{key}=VALUE on the command line)")
+        check_name(kind, key, _PART_TYPES)
+
+
+def _as_part(name: str, part: type[_Part], value: object) -> _Part:
+    """``value`` as the part ``name``: the defaults for None, a part built from a mapping."""
+    if value is None:
+        return part()
+    if isinstance(value, Mapping):
+        return part(**value)
+    if type(value) is not part:
+        raise ConfigurationError(f"{name}: expected a {part.__name__} or a mapping of its "
+                                 f"fields, received {type(value).__name__}")
+    return value
 
 
 def _check_per_joint_type(config: Any, name: str, bounds: _Range) -> None:
@@ -329,17 +377,21 @@ def _in_range(name: str, value: object, bounds: _Range) -> None:
             f"{name}: expected a finite number in {interval}, received {value!r}") from None
 
 
-def config_with_overrides(config: ControllerConfig | None, overrides: dict[str, object]
-                          ) -> ControllerConfig:
-    """``config`` (the defaults when None) with the fields in ``overrides`` changed.
+def config_with_overrides(config: ControllerConfig | None,
+                          overrides: Mapping[str, _Part | Mapping[str, Any]]) -> ControllerConfig:
+    """``config`` (the defaults when None) with the parts in ``overrides`` changed (a part,
+    or a mapping of some of its fields): a controller's keyword arguments.
 
     Raises:
-        ConfigurationError: Keys that are not fields (every one named, the fields listed), or
-            a value out of its range (the field and the range named).
+        ConfigurationError: Keys that are not parts (every one named, the parts listed, a
+            bare parameter name with its path), or a value out of its range (the field and
+            the range named).
     """
-    unknown = sorted(set(overrides) - set(ControllerConfig.__dataclass_fields__))
-    if unknown:  # all of them at once (ControllerConfig itself names the first)
-        valid = ", ".join(ControllerConfig.__dataclass_fields__)
+    unknown = sorted(set(overrides) - set(_PART_TYPES))
+    if unknown:  # all of them at once
+        nested = "; ".join(f"{key} is {_PART_OF[key]}.{key}: {_PART_OF[key]}={{{key!r}: ...}}"
+                           for key in unknown if key in _PART_OF)
         raise ConfigurationError(
-            f"unknown controller parameter(s) {unknown}; valid controller parameters: {valid}")
-    return replace(config or ControllerConfig(), **overrides)
+            f"unknown controller parameter(s) {unknown}; valid controller parameters: "
+            f"{', '.join(_PART_TYPES)}" + (f" (they are nested: {nested})" if nested else ""))
+    return (config or ControllerConfig()).with_parts(**overrides)

@@ -72,7 +72,8 @@ class PlacoController:
         """Args:
             config: Gains, weights and limits (see :class:`ControllerConfig`).
             description: The robot files (found automatically by default).
-            **overrides: Fields of :class:`ControllerConfig` to change, e.g. ``com_kp=100``.
+            **overrides: Parts of :class:`ControllerConfig` to change (a part, or a mapping of
+                some of its fields), e.g. ``gains={"com_kp": 100.0}``.
         """
         self.config = cfg = config_with_overrides(config, overrides)
         self.description = description or Go2Description.default()
@@ -85,14 +86,14 @@ class PlacoController:
                 f"PlaCo joint order {list(robot.joint_names())} differs from {JOINT_NAMES}")
         self._nv = robot.model.nv
         self._nj = self._nv - 6
-        self.tau_max = cfg.torque_limit_fraction * self.description.effort_limit
+        self.tau_max = cfg.limits.torque_limit_fraction * self.description.effort_limit
 
         self.solver = solver = placo.DynamicsSolver(robot)
         solver.mask_fbase(False)
         # dt only enters PlaCo's limit rows here (no integration). With the 1 ms tick they
         # chattered (the joint-limit row ``qd + dt qdd <= sqrt(2 d qdd_safe)`` is a 1/dt gain);
         # our own limit horizon makes the velocity rows identical to the reference's.
-        solver.dt = cfg.joint_limit_horizon_s
+        solver.dt = cfg.limits.joint_limit_horizon_s
         solver.torque_cost = 0.0
         solver.enable_torque_limits(True)
         for name, limit in zip(JOINT_NAMES, self.tau_max):
@@ -102,13 +103,14 @@ class PlacoController:
 
         robot.update_kinematics()
         self.com_task = solver.add_com_task(robot.com_world())
-        self.com_task.configure("com", "soft", cfg.com_weight)
+        self.com_task.configure("com", "soft", cfg.weights.com_weight)
         self.base_task = solver.add_orientation_task("base", np.eye(3))
-        self.base_task.configure("base_orientation", "soft", cfg.base_orientation_weight)
+        self.base_task.configure("base_orientation", "soft", cfg.weights.base_orientation_weight)
         # One joints task per joint: PlaCo's joints task has one weight, ours per-joint ones.
         self.posture_tasks = [solver.add_joints_task() for _ in JOINT_NAMES]
-        for task, kp in ((self.com_task, cfg.com_kp), (self.base_task, cfg.base_orientation_kp),
-                         *((t, cfg.posture_kp) for t in self.posture_tasks)):
+        gains = cfg.gains
+        for task, kp in ((self.com_task, gains.com_kp), (self.base_task, gains.base_orientation_kp),
+                         *((t, gains.posture_kp) for t in self.posture_tasks)):
             task.kp, task.kd = kp, 2.0 * math.sqrt(kp)
         self._posture = np.zeros(self._nj)
         self.set_posture_weights(np.ones(self._nj))
@@ -118,19 +120,20 @@ class PlacoController:
             task = solver.add_position_task(FOOT_FRAMES[leg], np.zeros(3))
             contact = solver.add_point_contact(task)
             contact.unilateral = True
-            contact.mu = cfg.friction_coefficient
+            contact.mu = cfg.contacts.friction_coefficient
             self.foot_tasks[leg], self.contacts[leg] = task, contact
         self._q: np.ndarray | None = None
-        self.motor = MotorCommandShaper(cfg.shaping, control_period_s=cfg.control_period_s,
+        period_s = cfg.solver.control_period_s
+        self.motor = MotorCommandShaper(cfg.shaping, control_period_s=period_s,
                                         tau_max=self.tau_max,
                                         effort_limit=self.description.effort_limit,
                                         joint_types=joint_types(JOINT_NAMES))
-        self._foot_weight = dict.fromkeys(LEGS, cfg.foot_weight)
+        self._foot_weight = dict.fromkeys(LEGS, cfg.weights.foot_weight)
         self._leg_joints = {leg: self.description.leg_joint_indices(leg) for leg in LEGS}
         self.reach = FootReach(self.description, LEGS)
         #: Which feet stand, their force bounds and the ramps (PlaCo's contacts follow it).
         self.schedule = ContactSchedule(LEGS, cfg.contacts,
-                                        control_period_s=cfg.control_period_s,
+                                        control_period_s=period_s,
                                         listener=self._configure_foot)
         for leg in LEGS:
             self._configure_foot(leg)
@@ -155,7 +158,7 @@ class PlacoController:
         self.set_posture_weights(np.ones(self._nj))
         for leg in LEGS:
             self.set_foot_target(leg, self.foot_position(leg))
-            self._foot_weight[leg] = self.config.foot_weight
+            self._foot_weight[leg] = self.config.weights.foot_weight
         self.schedule.reset()  # every foot configured again
         result = self.solver.solve(False)
         self._tau_good = (np.array(result.tau[6:]) if result.success
@@ -194,13 +197,14 @@ class PlacoController:
             raise ConfigurationError(
                 f"posture weights: expected values >= 0, received {weights.tolist()}")
         for task, name, weight in zip(self.posture_tasks, JOINT_NAMES, weights):
-            task.configure(f"posture {name}", "soft", self.config.posture_weight * float(weight))
+            task.configure(f"posture {name}", "soft",
+                           self.config.weights.posture_weight * float(weight))
 
     def set_foot_weight(self, leg: str, weight: float | None = None) -> None:
         """Weight of a swing foot's position task (0 hands the leg to the posture task;
         ``None`` restores the configured ``foot_weight``)."""
         check_name("leg", leg, LEGS)
-        weight = self.config.foot_weight if weight is None else weight
+        weight = self.config.weights.foot_weight if weight is None else weight
         self._foot_weight[leg] = as_float(f"{leg} foot weight", weight, low=0.0)
         self._configure_foot(leg)
 
@@ -260,7 +264,7 @@ class PlacoController:
     @property
     def control_period_s(self) -> float:
         """The period [s] the controller runs at (its motor command integrates over it)."""
-        return self.config.control_period_s
+        return self.config.solver.control_period_s
 
     def shoulder_position(self, leg: str) -> np.ndarray:
         """World position [m] of a leg's shoulder (fixed to the base) at the last state."""
@@ -287,14 +291,14 @@ class PlacoController:
         self.motor.set_stance(self._leg_joints[leg], stance)
         if stance:
             task.configure(f"{leg}_contact", "hard", 1.0)
-            task.kp, task.kd = 0.0, cfg.contact_damping
-            ratio = max(self.schedule.max_normal_force(leg) / cfg.max_normal_force_n,
+            task.kp, task.kd = 0.0, cfg.gains.contact_damping
+            ratio = max(self.schedule.max_normal_force(leg) / cfg.contacts.max_normal_force_n,
                         MIN_FORCE_RATIO)
-            contact.weight_forces = cfg.force_weight / (ratio * ratio)
+            contact.weight_forces = cfg.weights.force_weight / (ratio * ratio)
             contact.active = True
         else:
             task.configure(f"{leg}_foot", "soft", self._foot_weight[leg])
-            task.kp, task.kd = cfg.foot_kp, 2.0 * math.sqrt(cfg.foot_kp)
+            task.kp, task.kd = cfg.gains.foot_kp, 2.0 * math.sqrt(cfg.gains.foot_kp)
             contact.active = False
 
     # ------------------------------------------------------------------ the tick
@@ -359,7 +363,7 @@ class PlacoController:
             return math.nan, math.nan
         tau_full, qdd, forces = self._last
         eq = float(np.abs(tau_full[:6]).max())
-        mu = self.config.friction_coefficient
+        mu = self.config.contacts.friction_coefficient
         ineq = float(max((np.abs(tau_full[6:]) - self.tau_max).max(), 0.0))
         for i, leg in enumerate(LEGS):
             if not self.schedule.is_stance(leg):
@@ -390,7 +394,7 @@ class PlacoController:
         self._last = None
         self.motor.reference.release()
         return ControlOutput.damped_hold(
-            self._tau_good, v, damping=self.config.fallback_damping, tau_max=self.tau_max,
+            self._tau_good, v, damping=self.config.shaping.fallback_damping, tau_max=self.tau_max,
             message=message, elapsed_s=time.perf_counter() - t0, contacts=len(LEGS),
             q_joints=None if self._q is None else self._q[7:])
 

@@ -55,19 +55,20 @@ class WholeBodyController:
             description: The robot files (found automatically by default).
             extra_frames: Frames (besides the feet and the base) whose kinematics tasks added
                 with :meth:`add_task` will read, e.g. ``("FR_calf",)``.
-            **overrides: Fields of :class:`ControllerConfig` to change, e.g. ``backend="osqp"``.
+            **overrides: Parts of :class:`ControllerConfig` to change (a part, or a mapping of
+                some of its fields), e.g. ``solver={"backend": "osqp"}``.
 
         Raises:
-            ConfigurationError: Overrides that are not fields (each named, the fields
-                listed), a value out of its range (the field and range named), an unknown
-                frame in ``extra_frames``.
+            ConfigurationError: Overrides that are not parts (each named, the parts
+                listed; a bare parameter name with its path), a value out of its range (the
+                field and range named), an unknown frame in ``extra_frames``.
             UnknownNameError: A backend that is not installed (the installed ones listed).
         """
         self.config = cfg = config_with_overrides(config, overrides)
         self.description = description or Go2Description.default()
         self.model = model = self.description.build_model()
         self._nq, self._nv = model.nq, model.nv  # read every tick: Python ints, not pybind
-        self.backend = make_backend(cfg.backend)
+        self.backend = make_backend(cfg.solver.backend)
         self.legs = legs = tuple(LEGS)
         feet = tuple(FOOT_FRAMES[leg] for leg in legs)
         for frame in extra_frames:
@@ -84,7 +85,8 @@ class WholeBodyController:
         self._leg_index = {leg: i for i, leg in enumerate(legs)}
         self._leg_joints = [self.description.leg_joint_indices(leg) for leg in legs]
 
-        self.schedule = ContactSchedule(legs, cfg.contacts, control_period_s=cfg.control_period_s,
+        period_s = cfg.solver.control_period_s
+        self.schedule = ContactSchedule(legs, cfg.contacts, control_period_s=period_s,
                                         listener=self._contact_changed)
         self.reach = FootReach(self.description, legs)
         self.balance = BalanceProblem(self.description, model, self.kinematics, cfg, legs=legs,
@@ -95,13 +97,13 @@ class WholeBodyController:
         self.com_task, self.base_task = self.balance.com_task, self.balance.base_task
         self.posture_task, self.foot_tasks = self.balance.posture_task, self.balance.foot_tasks
         self.contact_task = self.balance.contact_task
-        self.motor = MotorCommandShaper(cfg.shaping, control_period_s=cfg.control_period_s,
+        self.motor = MotorCommandShaper(cfg.shaping, control_period_s=period_s,
                                         tau_max=self.balance.torque_limits.tau_max,
                                         effort_limit=self.description.effort_limit,
                                         joint_types=joint_types(JOINT_NAMES))
-        self.recovery = QpRecovery(cfg.backend, self.builder, motor=self.motor,
+        self.recovery = QpRecovery(cfg.solver.backend, self.builder, motor=self.motor,
                                    torque_limits=self.balance.torque_limits,
-                                   damping=cfg.fallback_damping)
+                                   damping=cfg.shaping.fallback_damping)
         #: The sets of loaded feet whose plans :meth:`reset` makes ready: all of them and
         #: each foot raised (a foot leaving or touching the ground never waits for one).
         self.prepared_supports: tuple[tuple[str, ...], ...] = (
@@ -115,7 +117,7 @@ class WholeBodyController:
     @property
     def control_period_s(self) -> float:
         """The period [s] the controller runs at (its motor command integrates over it)."""
-        return self.config.control_period_s
+        return self.config.solver.control_period_s
 
     @property
     def tau_max(self) -> np.ndarray:
