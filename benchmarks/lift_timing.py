@@ -93,7 +93,7 @@ class LiftLoop:
         """One control period: the lift's phase (``None`` before it), the state read, the
         command sent, and the CPU time [s] of ``controller.step``."""
         loop = self.loop
-        phase = None if self.lift is None else self.lift.update(loop.sim.time_s)
+        phase = None if self.lift is None else self.lift.advance(loop.sim.time_s)
         q, v = loop.read_state()
         out, cpu_s = timed_step(self.controller, q, v)
         loop.robot.write_command(out)
@@ -225,7 +225,7 @@ def replay(recording: Recording, factory: Callable[[], BalanceController], *,
         lift.start(float(recording.t[0]))
         samples, stages = [], {}
         for q, v, t in zip(recording.q, recording.v, recording.t):
-            lift.update(float(t))
+            lift.advance(float(t))
             start = time.perf_counter()
             out = controller.step(q, v)
             samples.append(time.perf_counter() - start)

@@ -5,7 +5,7 @@ runs here: every tick, your code hands the controller the robot's state, ``q`` (
 ``v`` (18,) in Pinocchio's conventions (base position and quaternion ``x, y, z, w``, then the
 joints in the URDF's order FL, FR, RL, RR x hip, thigh, calf; the base's velocities in its
 own frame), and sends the motor command it returns to the drivers. A ``LegLift`` is driven
-by hand: started, then updated with the clock every tick; it moves the controller's targets
+by hand: started, then advanced with the clock every tick; it moves the controller's targets
 and contacts through its phases.
 
 The "robot" here is the simplest stand-in for yours: an ideal plant that does exactly what
@@ -36,7 +36,7 @@ def run(*, height_m: float = 0.30, hold_s: float = 0.5) -> dict[str, float]:
     t, highest, ticks, not_ok = 0.0, 0.0, 0, 0
     lift.start(t)
     while lift.phase is not LiftPhase.DONE:
-        lift.update(t)                                  # this tick's targets and contacts
+        lift.advance(t)                                 # this tick's targets and contacts
         out = controller.step(q, v)                     # one QP: the motor command
         # Your drivers get, per joint (description order): out.q_des [rad], out.dq_des
         # [rad/s], out.kp [N m/rad], out.kd [N m s/rad], out.tau_ff [N m].

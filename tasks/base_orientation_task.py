@@ -67,4 +67,4 @@ class BaseOrientationTask(Task):
             self.gains, self.error, self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)  # the compiled kernel fills every array
+        self.evaluate(kinematics)  # the compiled kernel fills every array

@@ -40,4 +40,4 @@ class ComTask(Task):
             self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)  # the compiled kernel fills every array
+        self.evaluate(kinematics)  # the compiled kernel fills every array

@@ -57,7 +57,7 @@ class Constraint:
     A constraint declares how many rows it needs for a layout (:meth:`rows`), the slack
     variables it adds (``slacks``) and the frames it reads (``frames``); it writes its
     entries into a :class:`ConstraintBlock` in place: the constant ones once per layout in
-    :meth:`setup`, the rest every tick in :meth:`update`. ``equality`` rows have
+    :meth:`setup`, the rest every tick in :meth:`write`. ``equality`` rows have
     ``lower == upper``. ``name`` names the group in failure diagnoses.
 
     Two declarations let a problem builder do more with the rows than keep them:
@@ -91,8 +91,15 @@ class Constraint:
     def setup(self, layout: VariableLayout, block: ConstraintBlock) -> None:
         """Write the entries that depend on the layout only (once per layout)."""
 
-    def update(self, kinematics: RobotKinematics, layout: VariableLayout,
-               block: ConstraintBlock) -> None:
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        super().__init_subclass__(**kwargs)
+        if "update" in vars(cls):  # the method's name before this release
+            raise TypeError(f"{cls.__name__}.update: a constraint writes its tick's entries in "
+                            "write(kinematics, layout, block) (renamed from update); rename "
+                            "the method")
+
+    def write(self, kinematics: RobotKinematics, layout: VariableLayout,
+              block: ConstraintBlock) -> None:
         """Write this tick's entries at the last state.
 
         Override it, or (built-in constraints) :meth:`_compiled_call`: its kernel and
@@ -110,16 +117,16 @@ class Constraint:
         A problem builder keeps one per layout and calls it every tick. A built-in
         constraint's is its compiled kernel bound to its arrays
         (:func:`wbc.core.compiled_call.bind_compiled`; getting it loads the compiled code, so
-        the first tick in a layout does not); a constraint that overrides :meth:`update`
+        the first tick in a layout does not); a constraint that overrides :meth:`write`
         gets that method with these arguments. Its arrays are read when it runs, but
         scalars are taken as they are now: a constraint whose setters change a value the
         call reads must change an array in place.
         """
-        if type(self).update is not Constraint.update:
-            return functools.partial(self.update, kinematics, layout, block)
+        if type(self).write is not Constraint.write:
+            return functools.partial(self.write, kinematics, layout, block)
         compiled = self._compiled_call(kinematics, layout, block)
         if compiled is None:
-            raise NotImplementedError(f"{type(self).__name__}.update")
+            raise NotImplementedError(f"{type(self).__name__}.write")
         return bind_compiled(compiled[0], *compiled[1])
 
     def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,

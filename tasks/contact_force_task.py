@@ -56,4 +56,4 @@ class ContactForceTask(Task):
         return task_kernels.force_target, (self.reference, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)  # the compiled kernel fills every array
+        self.evaluate(kinematics)  # the compiled kernel fills every array

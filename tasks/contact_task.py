@@ -60,4 +60,4 @@ class ContactTask(Task):
             k.v, self.jacobian, self.drift, self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)  # the compiled kernel fills every array
+        self.evaluate(kinematics)  # the compiled kernel fills every array

@@ -62,4 +62,4 @@ class FramePositionTask(Task):
             self.drift, self.error, self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)  # the compiled kernel fills every array
+        self.evaluate(kinematics)  # the compiled kernel fills every array

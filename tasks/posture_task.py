@@ -50,4 +50,4 @@ class PostureTask(Task):
             self.error_rate, self.desired_acceleration)
 
     def compute(self, kinematics: RobotKinematics) -> None:
-        self.update(kinematics)  # the compiled kernel fills every array
+        self.evaluate(kinematics)  # the compiled kernel fills every array

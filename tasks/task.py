@@ -39,7 +39,7 @@ def _store_motion(reference, target, velocity, feedforward):  # pragma: no cover
 class Task:
     """A term of the QP's cost, by default on the generalized accelerations ``qdd`` (nv,).
 
-    Each tick, :meth:`update` reads the robot's kinematics (a
+    Each tick, :meth:`evaluate` reads the robot's kinematics (a
     :class:`tasks.RobotKinematics` already updated at the measured state) and fills, in
     place:
 
@@ -265,7 +265,7 @@ class Task:
 
     # ------------------------------------------------------------------ the tick
 
-    def update(self, kinematics: RobotKinematics) -> None:
+    def evaluate(self, kinematics: RobotKinematics) -> None:
         """Recompute error, Jacobian, drift and desired acceleration at the last state.
 
         A built-in task runs its compiled kernel, whose arguments are gathered once

@@ -48,7 +48,7 @@ def run_lift(leg: str = "FR", height_m: float = 0.40, hold_s: float = 2.0,
             interrupted_in = lift.phase
             lift.request_lower(now)
         q, v = loop.read_state()
-        phase = lift.update(now)
+        phase = lift.advance(now)
         if not phases or phases[-1] != phase:
             phases.append(phase)
         out = loop.command(q, v)

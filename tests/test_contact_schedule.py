@@ -113,7 +113,7 @@ def test_leg_lift_asks_the_schedule_for_ramps_and_never_sets_bounds_each_tick(de
     lift.start(t)
     unloading = []
     while lift.phase is not LiftPhase.DONE:
-        phase = lift.update(t)
+        phase = lift.advance(t)
         out = controller.step(q, v)
         assert out.ok, out.message
         if phase is LiftPhase.UNLOADING:  # the bound this tick's QP had

@@ -44,16 +44,16 @@ def test_the_example_task_jacobian_and_drift_against_finite_differences(model):
         return data.oMf[model.getFrameId("base")].translation[2]
 
     def rate(qq, v):
-        kinematics.update(qq, v)
-        task.update(kinematics)
+        kinematics.compute(qq, v)
+        task.evaluate(kinematics)
         return task.jacobian @ v
 
     for _ in range(5):
         q = random_configuration(model, rng, scale=0.5)
         v = rng.normal(size=model.nv)
         plus, minus = pin.integrate(model, q, h * v), pin.integrate(model, q, -h * v)
-        kinematics.update(q, v)
-        task.update(kinematics)
+        kinematics.compute(q, v)
+        task.evaluate(kinematics)
         jv, drift = (task.jacobian @ v).copy(), task.drift.copy()
         np.testing.assert_allclose(jv, (height(plus) - height(minus)) / (2 * h), atol=1e-6)
         np.testing.assert_allclose(drift, (rate(plus, v) - rate(minus, v)) / (2 * h), atol=1e-4)
@@ -102,7 +102,7 @@ class _ComAccelerationAtLeast(Constraint):
     def rows(self, layout):
         return 1
 
-    def update(self, kinematics, layout, block):
+    def write(self, kinematics, layout, block):
         block.A[0, :layout.nv] = kinematics.com_jacobian[0]
         block.lower[0] = self.minimum - kinematics.com_drift[0]
         block.upper[0] = INFINITY
@@ -126,3 +126,10 @@ def test_a_user_constraint_binds_in_the_reduced_and_the_full_qp(description, eli
     eq, ineq = controller.problem.violations(controller.last_solution)
     assert eq < 1e-8 and ineq < 1e-8
     assert "com acceleration" in controller.problem.row_groups
+
+
+def test_a_constraint_written_for_the_old_update_name_is_refused_naming_write():
+    with pytest.raises(TypeError, match=r"_Old\.update: .* write\(kinematics, layout, block\)"):
+        class _Old(Constraint):
+            def update(self, kinematics, layout, block):
+                pass

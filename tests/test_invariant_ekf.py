@@ -202,7 +202,7 @@ def test_a_foot_the_schedule_lets_go_follows_the_kinematics_and_moves_nothing():
     raised = q.copy()
     raised[7 + 4:7 + 6] += [0.4, -0.6]  # FR thigh and calf: the foot goes up and forward
     legs = LegKinematics()
-    legs.update(raised[7:])
+    legs.compute(raised[7:])
     tick = 0
     for tick in range(1, 501):
         sample = record(raised, tick=tick)

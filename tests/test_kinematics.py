@@ -60,7 +60,7 @@ def assert_matches_pinocchio(kinematics: RobotKinematics, model: pin.Model, seed
     rng = np.random.default_rng(seed)
     for _ in range(20):
         q, v = random_state(model, rng)
-        kinematics.update(q, v)
+        kinematics.compute(q, v)
         for name, expected in pinocchio_outputs(model, kinematics.frames, q, v).items():
             np.testing.assert_allclose(getattr(kinematics, name), expected, rtol=1e-9,
                                        atol=1e-9, err_msg=name)
@@ -107,13 +107,13 @@ def test_jacobians_match_finite_differences_of_placements(model):
     rng = np.random.default_rng(2)
     for _ in range(3):
         q, v = random_state(model, rng)
-        kinematics.update(q, v)
+        kinematics.compute(q, v)
         frame_jacobian = kinematics.frame_jacobian.copy()
         com_jacobian = kinematics.com_jacobian.copy()
         for k in range(model.nv):
             placements = []
             for sign in (1.0, -1.0):
-                kinematics.update(pin.integrate(model, q, sign * STEP * np.eye(model.nv)[k]), v)
+                kinematics.compute(pin.integrate(model, q, sign * STEP * np.eye(model.nv)[k]), v)
                 placements.append((kinematics.frame_position.copy(),
                                    kinematics.frame_rotation.copy(),
                                    kinematics.com_position.copy()))
@@ -131,11 +131,11 @@ def test_drifts_are_the_time_derivative_of_jacobian_times_v(model):
     rng = np.random.default_rng(3)
     for _ in range(5):
         q, v = random_state(model, rng)
-        kinematics.update(q, v)
+        kinematics.compute(q, v)
         frame_drift, com_drift = kinematics.frame_drift.copy(), kinematics.com_drift.copy()
         rates = []
         for sign in (1.0, -1.0):  # along the motion at constant v: q(t) = q (+) t v
-            kinematics.update(pin.integrate(model, q, sign * STEP * v), v)
+            kinematics.compute(pin.integrate(model, q, sign * STEP * v), v)
             rates.append((kinematics.frame_jacobian @ v, kinematics.com_jacobian @ v))
         (frame_plus, com_plus), (frame_minus, com_minus) = rates
         np.testing.assert_allclose(frame_drift, (frame_plus - frame_minus) / (2 * STEP),
@@ -154,10 +154,10 @@ def test_update_writes_in_place_and_allocates_nothing(model):
     arrays = {name: getattr(kinematics, name) for name in OUTPUTS}
     rng = np.random.default_rng(4)
     q, v = random_state(model, rng)
-    kinematics.update(q, v)
+    kinematics.compute(q, v)
     before = {name: array.copy() for name, array in arrays.items()}
     q, v = random_state(model, rng)
-    kinematics.update(q, v)
+    kinematics.compute(q, v)
     for name, array in arrays.items():
         assert getattr(kinematics, name) is array, name
         assert not np.array_equal(array, before[name]), f"{name} was not updated"
@@ -198,26 +198,26 @@ def test_frame_and_model_errors_name_the_valid_choices(model):
 def test_update_refuses_non_finite_states_and_leaves_the_outputs(model):
     kinematics = RobotKinematics(model, FRAMES)
     q, v = random_state(model, np.random.default_rng(6))
-    assert kinematics.update(q, v) is True
+    assert kinematics.compute(q, v) is True
     before = {name: getattr(kinematics, name).copy() for name in OUTPUTS}
     for bad_q, bad_v in ((np.where(np.arange(19) == 5, np.nan, q), v),
                          (q, np.where(np.arange(18) == 17, -np.inf, v))):
-        assert kinematics.update(bad_q, bad_v) is False
+        assert kinematics.compute(bad_q, bad_v) is False
         for name, value in before.items():
             np.testing.assert_array_equal(getattr(kinematics, name), value, err_msg=name)
 
 
-def test_update_checks_sizes_and_checked_update_validates(model):
+def test_compute_checks_sizes_and_checked_compute_validates(model):
     kinematics = RobotKinematics(model, FRAMES)
     q, v = random_state(model, np.random.default_rng(5))
-    with pytest.raises(ConfigurationError, match=r"^RobotKinematics.update: expected q of shape "
+    with pytest.raises(ConfigurationError, match=r"^RobotKinematics.compute: expected q of shape "
                                                  r"\(19,\) and v of shape \(18,\), received "
                                                  r"\(7,\) and \(18,\)$"):
-        kinematics.update(q[:7], v)
-    kinematics.checked_update(q.tolist(), v.tolist())
+        kinematics.compute(q[:7], v)
+    kinematics.checked_compute(q.tolist(), v.tolist())
     np.testing.assert_array_equal(kinematics.q, q)
     with pytest.raises(ConfigurationError, match=r"^v: expected an array of shape \(18,\), "
                                                  r"received shape \(17,\)$"):
-        kinematics.checked_update(q, v[1:])
+        kinematics.checked_compute(q, v[1:])
     with pytest.raises(NonFiniteError, match=r"^q: non-finite value at index \[3\]"):
-        kinematics.checked_update(np.where(np.arange(19) == 3, np.nan, q), v)
+        kinematics.checked_compute(np.where(np.arange(19) == 3, np.nan, q), v)

@@ -23,7 +23,7 @@ def test_foot_positions_and_jacobians_match_pinocchio(legs, model):
         q[3:7] = [0.0, 0.0, 0.0, 1.0]  # base at the origin: world = base frame
         pin.computeJointJacobians(model, data, q)
         pin.framesForwardKinematics(model, data, q)
-        legs.update(q[7:])
+        legs.compute(q[7:])
         for i, leg in enumerate(LEGS):
             frame = model.getFrameId(FOOT_FRAMES[leg])
             np.testing.assert_allclose(legs.foot_position[i], data.oMf[frame].translation,
@@ -44,9 +44,9 @@ def test_imu_offset_is_the_urdf_imu_frame(legs):
 
 def test_update_accepts_strided_joint_angles(legs, model):
     q = np.ascontiguousarray(random_configuration(model, np.random.default_rng(1)))
-    legs.update(q[7:])
+    legs.compute(q[7:])
     expected = legs.foot_position.copy()
     wide = np.zeros(24)
     wide[::2] = q[7:]
-    legs.update(wide[::2])
+    legs.compute(wide[::2])
     np.testing.assert_array_equal(legs.foot_position, expected)

@@ -78,7 +78,7 @@ def test_replacing_row_weights_raises_and_writing_into_them_reaches_the_qp(stand
     controller.step(standing, np.zeros(18))
     before = controller.builder.assemble_full().H.copy()
     controller.com_task.row_weights[2] = 0.0          # in place: the QP's own array
-    controller.builder.update()
+    controller.builder.evaluate()
     after = controller.builder.assemble_full().H
     J = controller.com_task.jacobian[2]
     w = controller.com_task.weight
@@ -121,8 +121,8 @@ def _with_and_without(task, standing, swing=()):
             controller.schedule.set_swing(leg)
         q = standing.copy()
         q[0] += 0.003
-        controller.kinematics.update(q, 0.1 * np.ones(18))
-        controller.builder.update()
+        controller.kinematics.compute(q, 0.1 * np.ones(18))
+        controller.builder.evaluate()
         out.append(controller.builder)
     return out
 
@@ -210,7 +210,7 @@ class _StanceRows(Constraint):
     def rows(self, layout):
         return 3 * len(layout.force_contacts)
 
-    def update(self, kinematics, layout, block):
+    def write(self, kinematics, layout, block):
         rows = [3 * i + a for i in layout.loaded for a in range(3)]
         task = self.contacts
         block.A[:, :layout.nv] = task.jacobian[rows]

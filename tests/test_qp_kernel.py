@@ -37,10 +37,10 @@ def controller_at(model, standing, swing, seed):
     rng = np.random.default_rng(seed)
     q = random_configuration(model, rng, scale=0.1, base=standing)
     v = rng.normal(size=18) * 0.3
-    c.kinematics.update(q, v)
+    c.kinematics.compute(q, v)
     c._q = q
     c.balance.before_update()
-    c.builder.update()
+    c.builder.evaluate()
     return c
 
 
@@ -122,8 +122,8 @@ def test_a_straight_stance_leg_falls_back_to_the_full_qp(model, standing):
     q = standing.copy()
     q[7 + 3 * LEGS.index("RR") + 1] = 0.0
     q[7 + 3 * LEGS.index("RR") + 2] = 0.0   # knee straight: the leg's Jacobian is singular
-    c.kinematics.update(q, np.zeros(18))
-    c.builder.update()
+    c.kinematics.compute(q, np.zeros(18))
+    c.builder.evaluate()
     c.builder.assemble()
     assert not c.builder.reduced
     out = c.step(q, np.zeros(18))

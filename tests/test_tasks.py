@@ -1,7 +1,7 @@
 """Every task's Jacobian and drift against finite differences, on the configuration manifold.
 
-The tasks are updated exactly as the control tick updates them: from a
-:class:`tasks.RobotKinematics` at the state, by their compiled ``update``.
+The tasks are evaluated exactly as the control tick evaluates them: from a
+:class:`tasks.RobotKinematics` at the state, by their compiled ``evaluate``.
 """
 
 import numpy as np
@@ -31,7 +31,7 @@ FRAMES = ("FL_foot", "FR_foot", "RL_foot", "RR_foot", "base")
 def updated(model, q, v):
     """Kinematics at (q, v), as the controller computes them each tick."""
     kinematics = RobotKinematics(model, FRAMES)
-    kinematics.update(q, v)
+    kinematics.compute(q, v)
     return kinematics
 
 
@@ -64,14 +64,14 @@ def world_points(model, points):
 def drift_fd(task, model, q, v):
     """d/dt (J(q(t)) v) along q(t) = q (+) t v with constant v (qdd = 0)."""
     def task_velocity(qq):
-        task.update(updated(model, qq, v))
+        task.evaluate(updated(model, qq, v))
         return task.jacobian @ v
     return velocity_fd(task_velocity, model, q, v)
 
 
 def check(task, value, model, seed):
     for q, v in samples(model, seed):
-        task.update(updated(model, q, v))
+        task.evaluate(updated(model, q, v))
         J, drift = task.jacobian.copy(), task.drift.copy()
         np.testing.assert_allclose(J @ v, velocity_fd(value, model, q, v), atol=1e-5, rtol=1e-5)
         np.testing.assert_allclose(drift, drift_fd(task, model, q, v), atol=1e-4, rtol=1e-4)
@@ -99,14 +99,14 @@ def test_frame_position_task(model, frame, axes):
 def test_base_orientation_task(model):
     task = BaseOrientationTask()
     for q, v in samples(model, 2):
-        task.update(updated(model, q, v))
+        task.evaluate(updated(model, q, v))
         R = pin.Quaternion(q[3:7]).matrix()
         R_next = pin.Quaternion(pin.integrate(model, q, H * v)[3:7]).matrix()
         np.testing.assert_allclose(task.jacobian @ v, pin.log3(R.T @ R_next) / H, atol=1e-5)
         np.testing.assert_allclose(task.drift, drift_fd(task, model, q, v), atol=1e-6)
         # The error is the rotation from the current to the target orientation, base frame.
         task.set_target(R_next)
-        task.update(updated(model, q, v))
+        task.evaluate(updated(model, q, v))
         np.testing.assert_allclose(task.error, H * (task.jacobian @ v), atol=1e-9)
 
 
@@ -121,7 +121,7 @@ def test_contact_task_rolling_point(model, radius):
     frames = ["FL_foot", "FR_foot", "RL_foot", "RR_foot"]
     task = bound(ContactTask(model, frames, radius_m=radius), model)
     for q, v in samples(model, 4):
-        task.update(updated(model, q, v))
+        task.evaluate(updated(model, q, v))
         data = model.createData()
         pin.framesForwardKinematics(model, data, q)
         # The body point under each sphere centre at this instant.
@@ -144,7 +144,7 @@ def test_desired_acceleration_is_pd_with_critical_damping(model):
     kinematics = updated(model, q, v)
     task.set_target(kinematics.com_position + [0.01, 0.0, 0.0], velocity=[0.1, 0.0, 0.0])
     task.set_feedforward([0.0, 0.0, 1.0])
-    task.update(kinematics)
+    task.evaluate(kinematics)
     expected = (100.0 * np.array([0.01, 0, 0])
                 + 20.0 * (np.array([0.1, 0, 0]) - kinematics.com_velocity))
     np.testing.assert_allclose(task.desired_acceleration, expected + [0, 0, 1.0], atol=1e-12)
@@ -169,7 +169,7 @@ def test_task_without_target_says_so(model):
     kinematics = updated(model, random_configuration(model, np.random.default_rng(0)),
                          np.zeros(18))
     with pytest.raises(ConfigurationError, match="ComTask: target not set; call set_target"):
-        task.update(kinematics)
+        task.evaluate(kinematics)
 
 
 def test_bad_task_parameters(model):
@@ -189,7 +189,7 @@ def test_a_force_task_s_value_is_the_force_and_its_desired_value_the_target(mode
     form: the identity over ``force:FR``), its desired value the target."""
     task = ContactForceTask("FR", target_n=[1.0, 2.0, 50.0])
     assert task.variables == ("force:FR",) and task.width(model.nv) == 3
-    task.update(updated(model, random_configuration(model, np.random.default_rng(7)),
+    task.evaluate(updated(model, random_configuration(model, np.random.default_rng(7)),
                         np.zeros(18)))
     forces = np.random.default_rng(8).normal(size=(5, 3))
     np.testing.assert_allclose(forces @ task.jacobian.T + task.drift, forces)

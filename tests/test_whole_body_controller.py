@@ -44,9 +44,9 @@ def check_solution(c, q, v, out, swing=()):
     feet = [f"{leg}_foot" for leg in LEGS]
     contact = ContactTask(model, feet, radius_m=FOOT_RADIUS_M)
     kinematics = RobotKinematics(model, feet)
-    kinematics.update(q, v)
+    kinematics.compute(q, v)
     contact.bind(kinematics)
-    contact.update(kinematics)
+    contact.evaluate(kinematics)
     contact_jac = contact.jacobian
     # Full inverse dynamics: M qdd + h - J^T f = [0 (base); tau (joints)].
     generalized = pin.rnea(model, data, q, v, qdd) - contact_jac.T @ forces.reshape(-1)

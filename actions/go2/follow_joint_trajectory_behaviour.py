@@ -153,7 +153,7 @@ class FollowJointTrajectoryBehaviour(
             return StepResult.aborted(self._failure)
         plan = self._plan
         if self._lift is not None:
-            phase = self._lift.update(now_s)
+            phase = self._lift.advance(now_s)
             if phase is not LiftPhase.DONE:
                 actual = self._measured()
                 return StepResult.running(self._feedback(

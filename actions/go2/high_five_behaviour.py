@@ -102,7 +102,7 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
                 elif self._lift is not None and self._lift.phase is not None:
                     self._lift.request_lower(now_s, urgent=True)
         if self._stand is not None:
-            phase = self._stand.update(now_s)
+            phase = self._stand.advance(now_s)
             self._progress = max(self._progress, _STAND_SHARE * self._stand.progress)
             if phase is not TransitionPhase.DONE:
                 return StepResult.running(self._feedback(now_s, "standing"))
@@ -125,7 +125,7 @@ class HighFiveBehaviour(Behaviour[HighFiveGoal, HighFiveResult, HighFiveFeedback
             if problem:
                 self._abort_reason = f"balance was being lost ({problem})"
                 lift.request_lower(now_s, urgent=True)
-        phase = lift.update(now_s)
+        phase = lift.advance(now_s)
         start = _STAND_SHARE if self._stood else 0.0
         self._progress = max(self._progress, start + (1.0 - start) * lift.progress)
         if phase is not LiftPhase.DONE:

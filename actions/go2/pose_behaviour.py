@@ -68,7 +68,7 @@ class PoseBehaviour(Behaviour[PoseGoal, Any, Any]):
             return StepResult.aborted(self.result_type(success=False, message=(
                 f"aborted: controller fault ({self.context.fault})")),
                 self._feedback(now_s, "aborted", transition.progress))
-        phase = transition.update(now_s)
+        phase = transition.advance(now_s)
         if phase is not TransitionPhase.DONE:
             name = "placing_foot" if phase is TransitionPhase.PLACING_FOOT else self.phase_name
             return StepResult.running(self._feedback(now_s, name, transition.progress))

@@ -238,8 +238,8 @@ class BalanceProblem:
         that do (returned, a new array; the torque-rate cost's reference) and the feet's
         forces (the force-rate cost's). Updates the kinematics at ``q`` at rest."""
         kin, builder = self.kinematics, self.builder
-        kin.update(q, np.zeros(kin.nv))
-        self.contact_task.update(kin)
+        kin.compute(q, np.zeros(kin.nv))
+        self.contact_task.evaluate(kin)
         gravity = kin.nonlinear_effects.copy()
         jc = self.contact_task.jacobian
         solved = np.linalg.lstsq(jc[:, :6].T, gravity[:6], rcond=None)[0]

@@ -299,7 +299,7 @@ class ProblemBuilder:
 
     # ------------------------------------------------------------------ the tick
 
-    def update(self) -> None:
+    def evaluate(self) -> None:
         """Run the contact task, the active tasks and the constraints at the last state.
 
         When the reduced QP can be used, the eliminated constraints (floating-base dynamics,
@@ -308,9 +308,9 @@ class ProblemBuilder:
         """
         kin = self.kinematics
         plan = self._plan()
-        self.contact_task.update(kin)
+        self.contact_task.evaluate(kin)
         for task in self._active_tasks:
-            task.update(kin)
+            task.evaluate(kin)
         for call in plan.calls:
             call()
         self._stale = plan.reduction is not None

@@ -184,7 +184,7 @@ class WholeBodyController:
         nv = self.model.nv
         q = as_vector("q", q, self.model.nq)
         v = np.zeros(nv) if v is None else as_vector("v", v, nv)
-        self.kinematics.update(q, v)
+        self.kinematics.compute(q, v)
         self._q = q
         self.balance.hold(q)
         self.schedule.reset()
@@ -329,7 +329,7 @@ class WholeBodyController:
         if q.shape != (nq,) or v.shape != (nv,):
             return self._fallback(v, f"state: expected q {(nq,)} and v {(nv,)}, "
                                      f"received {q.shape} and {v.shape}", t0)
-        if not self.kinematics.update(q, v):  # checks q and v are finite, in compiled code
+        if not self.kinematics.compute(q, v):  # checks q and v are finite, in compiled code
             bad = [f"q[{i}]" for i in np.flatnonzero(~np.isfinite(q))]
             bad += [f"v[{i}]" for i in np.flatnonzero(~np.isfinite(v))]
             return self._fallback(v, f"state: non-finite values at {', '.join(bad)}", t0)
@@ -337,7 +337,7 @@ class WholeBodyController:
         self._q = q
         self.balance.before_update()
         t1 = time.perf_counter()
-        builder.update()
+        builder.evaluate()
         problem = builder.assemble()
         t2 = time.perf_counter()
         result: QpResult | None = self.backend.solve(problem)

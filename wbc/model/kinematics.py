@@ -22,17 +22,17 @@ class RobotKinematics:
     """Kinematics and dynamics of a free-flyer robot with revolute joints, in one compiled call.
 
     Reads the Pinocchio model once (tree, joint placements, inertias including the fixed
-    bodies Pinocchio merged, frames, gravity); each :meth:`update` then replaces Pinocchio's
+    bodies Pinocchio merged, frames, gravity); each :meth:`compute` then replaces Pinocchio's
     ``computeAllTerms``, ``updateFramePlacements``, ``centerOfMass`` and the per-frame
     Jacobian, velocity and acceleration calls with one compiled call that allocates nothing.
     Pinocchio's conventions: ``q = [base position (world) [m], base quaternion (x, y, z, w),
     joint angles [rad]]``, ``v = [base linear velocity [m/s], base angular velocity [rad/s]
     (both in the base frame), joint rates [rad/s]]``.
 
-    Every output below is an array allocated once and overwritten in place by :meth:`update`
+    Every output below is an array allocated once and overwritten in place by :meth:`compute`
     (hold a reference, or ``.copy()`` to keep a value); spatial 6-vectors are (linear;
     angular), world-aligned. The compiled code is specialised to the model's sizes and the
-    number of frames: the first update for new sizes compiles (~8 s, then cached on disk).
+    number of frames: the first computation for new sizes compiles (~8 s, then cached on disk).
 
     Attributes:
         nq, nv: Configuration and velocity sizes.
@@ -104,11 +104,11 @@ class RobotKinematics:
                                      f"{list(self.frames)}")
         return self.frames.index(name)
 
-    def update(self, q: np.ndarray, v: np.ndarray) -> bool:
+    def compute(self, q: np.ndarray, v: np.ndarray) -> bool:
         """Recompute every output at the state ``(q, v)``: one compiled call, no allocation.
 
         The hot-path entry: ``q`` and ``v`` must be float64 NumPy arrays; their sizes and
-        finiteness are checked in the compiled call. Use :meth:`checked_update` for other
+        finiteness are checked in the compiled call. Use :meth:`checked_compute` for other
         inputs (lists, other dtypes) or to have a non-finite value raise.
 
         Args:
@@ -129,14 +129,14 @@ class RobotKinematics:
         if status == _NOT_FINITE:
             return False
         raise ConfigurationError(
-            f"RobotKinematics.update: expected q of shape ({self.nq},) and v of shape "
+            f"RobotKinematics.compute: expected q of shape ({self.nq},) and v of shape "
             f"({self.nv},), received {np.shape(q)} and {np.shape(v)}")
 
-    def checked_update(self, q: np.ndarray, v: np.ndarray) -> None:
-        """:meth:`update` after converting and validating the inputs (off the hot path).
+    def checked_compute(self, q: np.ndarray, v: np.ndarray) -> None:
+        """:meth:`compute` after converting and validating the inputs (off the hot path).
 
         Raises:
             ConfigurationError: Not numeric, or the wrong shape.
             NonFiniteError: A NaN or infinite entry.
         """
-        self.update(as_vector("q", q, self.nq), as_vector("v", v, self.nv))
+        self.compute(as_vector("q", q, self.nq), as_vector("v", v, self.nv))

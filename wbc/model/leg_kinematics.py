@@ -90,7 +90,7 @@ def leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_po
 
 
 class LegKinematics:
-    """The four legs' chains, read from the model once; :meth:`update` fills the outputs.
+    """The four legs' chains, read from the model once; :meth:`compute` fills the outputs.
 
     Attributes (updated in place by :meth:`update`, ``LEGS`` order):
         foot_position: Foot sphere centres in the base frame [m] (4, 3).
@@ -102,7 +102,7 @@ class LegKinematics:
 
     Example:
         >>> legs = LegKinematics()
-        >>> legs.update(q[7:])
+        >>> legs.compute(q[7:])
         >>> legs.foot_position[1]       # FR foot centre, base frame
     """
 
@@ -147,7 +147,7 @@ class LegKinematics:
         #: Scratch space of the compiled call.
         self.work = np.zeros((4, 3, 3))
 
-    def update(self, joint_q: np.ndarray) -> None:
+    def compute(self, joint_q: np.ndarray) -> None:
         """Fill the outputs for joint angles ``joint_q`` [rad] (12,), description order."""
         leg_kinematics(np.ascontiguousarray(joint_q, dtype=np.float64), self.rotations,
                        self.translations, self.axes, self.foot_offsets, self.foot_position,

@@ -70,7 +70,7 @@ class LegLiftTiming:
 class LegLift:
     """Drives a :class:`BalanceController`'s references through one leg lift.
 
-    Call :meth:`start` once, then :meth:`update` every control tick before
+    Call :meth:`start` once, then :meth:`advance` every control tick before
     ``controller.step``; :meth:`request_lower` interrupts the lift at any phase and brings
     the robot back to four loaded feet in bounded time. Positions are world-frame [m].
     The foot is unloaded and reloaded by a ramp of its normal-force bound that the
@@ -179,10 +179,10 @@ class LegLift:
 
     # ------------------------------------------------------------------ ticking
 
-    def update(self, now_s: float) -> LiftPhase:
+    def advance(self, now_s: float) -> LiftPhase:
         """Set the controller's references for time ``now_s`` [s]; returns the phase."""
         if self.phase is None:
-            raise ConfigurationError("LegLift.update: call start(now_s) first")
+            raise ConfigurationError("LegLift.advance: call start(now_s) first")
         ctrl, t = self.controller, self.timing
         schedule = ctrl.schedule
         elapsed = now_s - self._t0

@@ -100,10 +100,10 @@ class PostureTransition:
         self._t0 = now_s
         self.phase = TransitionPhase.MOVING
 
-    def update(self, now_s: float) -> TransitionPhase:
+    def advance(self, now_s: float) -> TransitionPhase:
         """Set the controller's references for time ``now_s`` [s]; returns the phase."""
         if self.phase is TransitionPhase.PLACING_FOOT:
-            if self._placing.update(now_s) is LiftPhase.DONE:
+            if self._placing.advance(now_s) is LiftPhase.DONE:
                 self._begin_moving(now_s)
             self.progress = max(self.progress, 0.3 * self._placing.progress)
         if self.phase is TransitionPhase.MOVING:
