@@ -16,18 +16,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
-from cyclonedds.util import duration
 
 from actions.action_runner import ActionRunner, BusyPolicy
 from actions.action_server import ActionServer
 from actions.client_goal_handle import ClientGoalHandle, GoalRejectedError
-from actions.dds.action_topics import ActionEndpoints, topic_names
 from actions.dds.dds_action_bridge import DdsActionBridge
 from actions.dds.dds_action_client import ActionServerUnavailableError, DdsActionClient
 from actions.dds.goal_request_check import TransportRejectionCode
 from actions.dds.payload_codec import decode_message, encode_message
-from actions.dds.wire_messages import SendGoalRequest, SendGoalResponse
 from actions.errors import ActionUsageError
 from actions.go2.go2_interfaces import HIGH_FIVE, STAND, HighFiveGoal, HighFiveResult
 from actions.goal_status import GoalStatus
@@ -37,6 +33,8 @@ from actions.ros_interfaces.control_msgs import FOLLOW_JOINT_TRAJECTORY
 from actions.ros_interfaces.trajectory_msgs import JointTrajectoryPoint
 from tests.scripted_behaviour import ScriptedBehaviour, scripted_factory
 from wbc.core.errors import ConfigurationError
+from wbc.robot_io.dds.action_endpoints import ActionEndpoints, topic_names
+from wbc.robot_io.dds.action_messages import SendGoalRequest, SendGoalResponse
 from wbc.robot_io.dds.domain_config import join_domain
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -239,10 +237,6 @@ class RawClient:
     def __init__(self, prefix: str) -> None:
         self.dds = join_domain("lo", domain_id=DOMAIN)
         self.ends = ActionEndpoints.for_client(self.dds, prefix, "high_five", lease_s=LEASE_S)
-        self.waitset = WaitSet(self.dds.participant)
-        reader = self.ends.readers["send_goal_response"]
-        self.condition = ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any)
-        self.waitset.attach(self.condition)
         wait_until(lambda: not self.ends.unmatched(), what="the server's endpoints")
 
     def send(self, goal: str, *, action_name: str = "high_five",
@@ -253,14 +247,13 @@ class RawClient:
             SendGoalRequest("raw", goal_id, action_name, action_type, goal))
         deadline = time.monotonic() + WAIT_S
         while time.monotonic() < deadline:
-            self.waitset.wait(duration(seconds=0.05))
-            for sample in self.ends.readers["send_goal_response"].take(16):
+            self.ends.wait(0.05)
+            for sample in self.ends.take("send_goal_response", 16):
                 if sample.sample_info.valid_data and sample.goal_id == goal_id:
                     return sample
         raise AssertionError(f"no response to goal {goal_id}")
 
     def close(self) -> None:
-        self.waitset.detach(self.condition)
         self.ends.close()
         self.dds.close()
 

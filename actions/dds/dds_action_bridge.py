@@ -28,25 +28,26 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
-from cyclonedds.core import DDSException, InstanceState
-from cyclonedds.pub import DataWriter
-
 from actions.action_client import ActionClient
 from actions.action_runner import ActionRunner
 from actions.client_goal_handle import ClientGoalHandle
-from actions.dds.action_topics import (
+from actions.dds.goal_request_check import TransportRejectionCode, check_goal_request
+from actions.dds.payload_codec import check_json_action, encode_message
+from actions.goal_status import GoalStatus
+from actions.responses import CancelResponse, CancelReturnCode, FeedbackMessage, Rejection
+from wbc.core.errors import ConfigurationError
+from wbc.robot_io.dds.action_endpoints import (
     DEFAULT_INTERFACE,
     DEFAULT_PREFIX,
     ActionEndpoints,
+    DdsError,
     check_lease,
     check_name,
-    publish_served_actions,
+    is_alive,
     unregister_instance,
     write_logged,
 )
-from actions.dds.goal_request_check import TransportRejectionCode, check_goal_request
-from actions.dds.payload_codec import check_json_action, encode_message
-from actions.dds.wire_messages import (
+from wbc.robot_io.dds.action_messages import (
     CancelGoalRequest,
     CancelGoalResponse,
     GoalFeedback,
@@ -54,12 +55,9 @@ from actions.dds.wire_messages import (
     GoalStatusUpdate,
     SendGoalRequest,
     SendGoalResponse,
-    ServedActions,
 )
-from actions.goal_status import GoalStatus
-from actions.responses import CancelResponse, CancelReturnCode, FeedbackMessage, Rejection
-from wbc.core.errors import ConfigurationError
-from wbc.robot_io.dds.domain_config import delete_entities, join_domain
+from wbc.robot_io.dds.domain_config import join_domain
+from wbc.robot_io.dds.served_directory import ServedDirectory
 
 logger = logging.getLogger(__name__)
 
@@ -94,7 +92,7 @@ class DdsActionBridge:
             (a :class:`~actions.robot.control_loop.ControlLoop`).
         domain_id: The DDS domain, 0 to 232.
         interface: The network interface (default ``lo``).
-        prefix: The topics' prefix (see :mod:`actions.dds.action_topics`).
+        prefix: The topics' prefix (see :mod:`wbc.robot_io.dds.action_endpoints`).
         actions: The action names to expose; default: every server registered on the runner
             now (servers added later are not exposed).
         lease_s: Liveliness lease [s] this bridge's writers offer (clients notice a dead server
@@ -136,14 +134,14 @@ class DdsActionBridge:
         self._pending: deque[Callable[[], None]] = deque()  # queued by runner callbacks
         self._lock = threading.Lock()  # serialises poll() and close()
         self._served: dict[str, _Served] = {}
-        self._directory: DataWriter[ServedActions] | None = None
+        self._directory: ServedDirectory | None = None
         self._dds = join_domain(interface, domain_id=domain_id)
         try:
             for client in clients:
                 ends = ActionEndpoints.for_server(self._dds, self.prefix, client.action_name,
                                                   lease_s=lease_s, client_lease_s=client_lease_s)
                 self._served[client.action_name] = _Served(client.action_name, client, ends)
-            self._directory = publish_served_actions(
+            self._directory = ServedDirectory.publish(
                 self._dds, self.prefix, {name: served.client.action_type.type_name
                                          for name, served in self._served.items()},
                 lease_s=lease_s)
@@ -202,7 +200,8 @@ class DdsActionBridge:
             for remote in list(self._live.values()):
                 if remote.handle is not None and not remote.handle.status.is_terminal:
                     remote.handle.cancel_goal_async()
-            delete_entities(self._directory)
+            if self._directory is not None:
+                self._directory.close()
             for served in self._served.values():
                 served.ends.close()
             self._dds.close()
@@ -216,13 +215,13 @@ class DdsActionBridge:
     def _take(self, served: _Served, role: str, handler: Callable[[_Served, Any], None]) -> None:
         gone: set[str] = set()
         try:
-            samples = served.ends.readers[role].take(TAKE_PER_POLL)
-        except DDSException:
+            samples = served.ends.take(role, TAKE_PER_POLL)
+        except DdsError:
             logger.exception("taking %s of '%s' failed", role, served.name)
             return
         for sample in samples:
             info = sample.sample_info
-            if info.instance_state != InstanceState.Alive:
+            if not is_alive(sample):
                 gone.add((sample if info.valid_data else sample.key_sample).client_id)
             elif info.valid_data:
                 handler(served, sample)
@@ -293,11 +292,11 @@ class DdsActionBridge:
 
     def _client_gone(self, served: _Served, client_id: str) -> None:
         """Cancel the goals of a client whose writers lost liveliness (or were deleted)."""
-        writers = served.ends.writers  # forget its responses: nobody will read them
-        unregister_instance(writers["send_goal_response"],
-                    SendGoalResponse(client_id, "", "", False, 0, "", 0.0))
-        unregister_instance(writers["cancel_goal_response"],
-                    CancelGoalResponse(client_id, "", "", "", 0, "", 0.0))
+        ends = served.ends  # forget its responses: nobody will read them
+        unregister_instance(ends, "send_goal_response",
+                            SendGoalResponse(client_id, "", "", False, 0, "", 0.0))
+        unregister_instance(ends, "cancel_goal_response",
+                            CancelGoalResponse(client_id, "", "", "", 0, "", 0.0))
         for remote in list(self._live.values()):
             if remote.served is served and remote.client_id == client_id and (
                     not remote.client_gone):
@@ -330,7 +329,7 @@ class DdsActionBridge:
             logger.exception("feedback of goal %s not sent", remote.goal_id)
             return
         sample = GoalFeedback(remote.goal_id, served.name, text, self._now_s())
-        self._pending.append(partial(write_logged, served.ends.writers["feedback"], sample))
+        self._pending.append(partial(write_logged, served.ends, "feedback", sample))
 
     def _publish_result(self, remote: _RemoteGoal, future: Future[Any]) -> None:
         wrapped = future.result()
@@ -342,7 +341,7 @@ class DdsActionBridge:
             logger.exception("result of goal %s cannot be sent as it is", remote.goal_id)
             text = encode_message(action_type.failure(f"the result could not be sent: {err}"),
                                   action_type.result_type, what="failure result")
-        write_logged(remote.served.ends.writers["result"], GoalResult(
+        write_logged(remote.served.ends, "result", GoalResult(
             remote.goal_id, remote.served.name, int(wrapped.status), text, self._now_s()))
 
     def _publish_statuses(self) -> None:
@@ -353,7 +352,7 @@ class DdsActionBridge:
             status = handle.status
             if status != remote.published:
                 remote.published = status
-                write_logged(remote.served.ends.writers["status"], GoalStatusUpdate(
+                write_logged(remote.served.ends, "status", GoalStatusUpdate(
                     remote.goal_id, remote.served.name, int(status), self._now_s()))
             if status.is_terminal:
                 self._retire(remote)
@@ -365,20 +364,20 @@ class DdsActionBridge:
             _, old = self._finished.popitem(last=False)
             if old.handle is not None:
                 self._uuid_of_local.pop(old.handle.goal_id, None)
-            writers = old.served.ends.writers
-            unregister_instance(writers["status"], GoalStatusUpdate(old.goal_id, "", 0, 0.0))
-            unregister_instance(writers["result"], GoalResult(old.goal_id, "", 0, "", 0.0))
+            ends = old.served.ends
+            unregister_instance(ends, "status", GoalStatusUpdate(old.goal_id, "", 0, 0.0))
+            unregister_instance(ends, "result", GoalResult(old.goal_id, "", 0, "", 0.0))
 
     def _respond_goal(self, served: _Served, client_id: str, goal_id: str,
                       rejection: Rejection | None) -> None:
         code, message = (0, "") if rejection is None else (
             int(rejection.code), self._wire_text(rejection.message))
-        write_logged(served.ends.writers["send_goal_response"], SendGoalResponse(
+        write_logged(served.ends, "send_goal_response", SendGoalResponse(
             client_id, goal_id, served.name, rejection is None, code, message, self._now_s()))
 
     def _respond_cancel(self, served: _Served, request: CancelGoalRequest,
                         response: CancelResponse) -> None:
-        write_logged(served.ends.writers["cancel_goal_response"], CancelGoalResponse(
+        write_logged(served.ends, "cancel_goal_response", CancelGoalResponse(
             request.client_id, request.request_id, request.goal_id, served.name,
             int(response.return_code), self._wire_text(response.message), self._now_s()))
 

@@ -24,40 +24,29 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeoutError
 from typing import Any
 
-from cyclonedds.core import (
-    DDSException,
-    GuardCondition,
-    InstanceState,
-    ReadCondition,
-    SampleState,
-    ViewState,
-    WaitSet,
-)
-from cyclonedds.util import duration
-
 from actions.action_client import ActionTimeoutError
 from actions.action_server import ActionServer
 from actions.action_type import ActionType
 from actions.behaviour import Behaviour
 from actions.client_goal_handle import ClientGoalHandle, GoalRejectedError
-from actions.dds.action_topics import (
-    DEFAULT_INTERFACE,
-    DEFAULT_PREFIX,
-    ActionEndpoints,
-    check_lease,
-    served_actions,
-    served_actions_reader,
-)
 from actions.dds.goals_in_flight import GoalsInFlight, SentGoal
 from actions.dds.payload_codec import check_json_action, encode_message
-from actions.dds.wire_messages import CancelGoalRequest, SendGoalRequest
 from actions.errors import ActionUsageError
 from actions.goal_lifecycle import resolve
 from actions.goal_record import GoalRecord
 from actions.responses import CancelResponse, CancelReturnCode, FeedbackMessage, WrappedResult
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.core.validation import is_finite_real
-from wbc.robot_io.dds.domain_config import delete_entities, join_domain
+from wbc.robot_io.dds.action_endpoints import (
+    DEFAULT_INTERFACE,
+    DEFAULT_PREFIX,
+    ActionEndpoints,
+    DdsError,
+    check_lease,
+)
+from wbc.robot_io.dds.action_messages import CancelGoalRequest, SendGoalRequest
+from wbc.robot_io.dds.domain_config import join_domain
+from wbc.robot_io.dds.served_directory import ServedDirectory
 
 logger = logging.getLogger(__name__)
 
@@ -68,8 +57,6 @@ CLOSE_TIMEOUT_S = 5.0
 #: How often ``wait_for_server`` checks the matching [s].
 MATCH_POLL_S = 0.005
 _TAKE_MAX = 256
-_ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
-_LIVELINESS_POLICY_ID = 8  # DDS_LIVELINESS_QOS_POLICY_ID
 
 
 class ActionServerUnavailableError(WbcError, ConnectionError):
@@ -96,7 +83,7 @@ class DdsActionClient:
         action_name: The server's name, e.g. ``"high_five"``.
         domain_id: The DDS domain, 0 to 232.
         interface: The network interface (default ``lo``).
-        prefix: The topics' prefix (see :mod:`actions.dds.action_topics`).
+        prefix: The topics' prefix (see :mod:`wbc.robot_io.dds.action_endpoints`).
         lease_s: Liveliness lease [s] this client offers: if it dies, the server cancels its
             goals within this time. Must not exceed the server's ``client_lease_s``.
 
@@ -124,14 +111,7 @@ class DdsActionClient:
         try:
             self._ends = ActionEndpoints.for_client(self._dds, prefix, action_name,
                                                     lease_s=self.lease_s)
-            participant = self._dds.participant
-            self._directory = served_actions_reader(self._dds, prefix)
-            self._waitset = WaitSet(participant)
-            self._conditions = [ReadCondition(reader, _ANY_SAMPLE)
-                                for reader in self._ends.readers.values()]
-            self._guard = GuardCondition(participant)
-            for condition in (*self._conditions, self._guard):
-                self._waitset.attach(condition)
+            self._directory = ServedDirectory.reader(self._dds, prefix)
         except BaseException:
             self._dds.close()
             raise
@@ -204,9 +184,9 @@ class DdsActionClient:
         sent = SentGoal(record, ClientGoalHandle(self, record), Future())
         self._goals.add_goal(sent)
         try:
-            self._ends.writers["send_goal_request"].write(SendGoalRequest(
+            self._ends.write("send_goal_request", SendGoalRequest(
                 self._client_id, goal_id, self.action_name, self.action_type.type_name, text))
-        except DDSException as err:
+        except DdsError as err:
             self._goals.forget(goal_id=goal_id)
             raise ActionServerUnavailableError(
                 f"sending goal {goal_id} to '{self.action_name}' failed: {err}") from err
@@ -227,9 +207,9 @@ class DdsActionClient:
         request_id = str(uuid.uuid4())
         future = self._goals.add_cancel(request_id)
         try:
-            self._ends.writers["cancel_goal_request"].write(CancelGoalRequest(
+            self._ends.write("cancel_goal_request", CancelGoalRequest(
                 self._client_id, request_id, record.goal_id, self.action_name))
-        except DDSException as err:
+        except DdsError as err:
             self._goals.forget(request_id=request_id)
             future.set_exception(ActionServerUnavailableError(
                 f"sending the cancel of goal {record.goal_id} failed: {err}"))
@@ -301,11 +281,10 @@ class DdsActionClient:
         missing = self._ends.unmatched()
         if len(missing) < len(self._ends.readers) + len(self._ends.writers):
             text += f"; endpoints not matched yet: {', '.join(missing)}"
-        incompatible = self._ends.writers["send_goal_request"].get_offered_incompatible_qos_status()
-        if incompatible.total_count and incompatible.last_policy_id == _LIVELINESS_POLICY_ID:
+        if self._ends.liveliness_refused("send_goal_request"):
             text += (f"; a server refused this client's liveliness lease_s={self.lease_s:g} s "
                      "(longer than the server's client_lease_s)")
-        served = served_actions(self._directory)
+        served = self._directory.entries()
         if served:
             return text + f"; action servers seen on this domain: {', '.join(served)}"
         return text + ("; no action server seen on this domain (is a DdsActionBridge polled on "
@@ -320,7 +299,7 @@ class DdsActionClient:
                 return
             self._closing = True
         self._closed.set()
-        self._guard.set(True)
+        self._ends.wake()
         if threading.current_thread() is self._thread:  # in a callback: the thread tears down
             self._closed_in_callback = True
             return
@@ -341,17 +320,17 @@ class DdsActionClient:
     # --- receive thread --------------------------------------------------------------------
 
     def _receive(self) -> None:
-        readers = self._ends.readers
-        handlers = ((readers["send_goal_response"], self._goals.on_goal_response),
-                    (readers["cancel_goal_response"], self._goals.on_cancel_response),
-                    (readers["feedback"], self._goals.on_feedback),
-                    (readers["status"], self._goals.on_status),
-                    (readers["result"], self._goals.on_result))
+        ends = self._ends
+        handlers = (("send_goal_response", self._goals.on_goal_response),
+                    ("cancel_goal_response", self._goals.on_cancel_response),
+                    ("feedback", self._goals.on_feedback),
+                    ("status", self._goals.on_status),
+                    ("result", self._goals.on_result))
         while not self._closing:
             try:
-                self._waitset.wait(duration(seconds=WAKE_PERIOD_S))
-                for reader, handler in handlers:
-                    for sample in reader.take(_TAKE_MAX):
+                ends.wait(WAKE_PERIOD_S)
+                for role, handler in handlers:
+                    for sample in ends.take(role, _TAKE_MAX):
                         if sample.sample_info.valid_data and not self._closing:
                             handler(sample)
                 self._check_server()
@@ -362,7 +341,7 @@ class DdsActionClient:
 
     def _check_server(self) -> None:
         """Fail the goals in flight once the server's writers lose their liveliness."""
-        alive = self._ends.readers["result"].get_liveliness_changed_status().alive_count
+        alive = self._ends.alive_writers("result")
         if alive or not self._server_alive:
             self._server_alive = bool(alive)
             return
@@ -375,7 +354,7 @@ class DdsActionClient:
         self._goals.fail_all(lambda what: ActionUsageError(
             f"the DdsActionClient of '{self.action_name}' was closed while {what}; the server "
             "cancels the goals of a client that closes"))
-        delete_entities(self._waitset, *self._conditions, self._guard, self._directory)
+        self._directory.close()
         self._ends.close()
         self._dds.close()
 

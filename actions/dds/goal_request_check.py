@@ -1,9 +1,9 @@
 """What a goal request from DDS must be before a server sees it, and the codes of its refusals.
 
-:func:`check_goal_request` turns a :class:`~actions.dds.wire_messages.SendGoalRequest` into the
-goal message, or into a :class:`~actions.responses.Rejection` that names what is wrong: the
-action, the interface, the goal id, or the field of the payload (with what was received and
-what is valid).
+:func:`check_goal_request` turns a
+:class:`~wbc.robot_io.dds.action_messages.SendGoalRequest` into the goal message, or into a
+:class:`~actions.responses.Rejection` that names what is wrong: the action, the interface, the
+goal id, or the field of the payload (with what was received and what is valid).
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ from typing import Any, NamedTuple
 
 from actions.action_type import ActionType
 from actions.dds.payload_codec import decode_message
-from actions.dds.wire_messages import SendGoalRequest
 from actions.responses import Rejection
 from wbc.core.errors import ConfigurationError
+from wbc.robot_io.dds.action_messages import SendGoalRequest
 
 
 class TransportRejectionCode(IntEnum):

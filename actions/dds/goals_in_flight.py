@@ -21,13 +21,6 @@ from typing import Any
 from actions.action_type import ActionType
 from actions.client_goal_handle import ClientGoalHandle
 from actions.dds.payload_codec import decode_message
-from actions.dds.wire_messages import (
-    CancelGoalResponse,
-    GoalFeedback,
-    GoalResult,
-    GoalStatusUpdate,
-    SendGoalResponse,
-)
 from actions.goal_lifecycle import resolve
 from actions.goal_record import GoalRecord
 from actions.goal_status import GoalStatus
@@ -39,6 +32,13 @@ from actions.responses import (
     WrappedResult,
 )
 from wbc.core.errors import ConfigurationError
+from wbc.robot_io.dds.action_messages import (
+    CancelGoalResponse,
+    GoalFeedback,
+    GoalResult,
+    GoalStatusUpdate,
+    SendGoalResponse,
+)
 
 logger = logging.getLogger(__name__)
 

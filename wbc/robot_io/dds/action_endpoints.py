@@ -1,4 +1,8 @@
-"""The DDS topics of one action, their QoS, and one side's readers and writers on them.
+"""The DDS topics of one action, their QoS, and one side's readers and writers on them: the
+transport of actions over DDS (:mod:`actions.dds` gives it meaning), :class:`ActionEndpoints`.
+
+The payloads (goal, feedback, result) travel as JSON text (:mod:`wbc.robot_io.dds.action_messages`),
+so one set of topics and types carries any action.
 
 Topic names are the action's name under a prefix (default ``rt/wbc/action``; ``rt/`` as ROS 2
 and Unitree name their topics)::
@@ -40,16 +44,27 @@ from __future__ import annotations
 
 import logging
 import re
-import uuid
 from typing import Any, NamedTuple
 
-from cyclonedds.core import DDSException, InstanceState, Policy, Qos
+from cyclonedds.core import (
+    DDSException,
+    GuardCondition,
+    InstanceState,
+    Policy,
+    Qos,
+    ReadCondition,
+    SampleState,
+    ViewState,
+    WaitSet,
+)
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
-from actions.dds.wire_messages import (
+from wbc.core.errors import ConfigurationError, WbcError
+from wbc.core.validation import is_finite_real
+from wbc.robot_io.dds.action_messages import (
     CancelGoalRequest,
     CancelGoalResponse,
     GoalFeedback,
@@ -57,10 +72,7 @@ from actions.dds.wire_messages import (
     GoalStatusUpdate,
     SendGoalRequest,
     SendGoalResponse,
-    ServedActions,
 )
-from wbc.core.errors import ConfigurationError
-from wbc.core.validation import is_finite_real
 from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities
 
 logger = logging.getLogger(__name__)
@@ -76,6 +88,7 @@ RESPONSE_DEPTH = 16
 FEEDBACK_DEPTH = 32
 #: Longest a write may block on a full reliable history [s].
 MAX_BLOCKING_S = 0.1
+_LIVELINESS_POLICY_ID = 8  # DDS_LIVELINESS_QOS_POLICY_ID
 #: Segments of a name: letters, digits and underscores, starting with a letter.
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$")
 
@@ -162,11 +175,22 @@ def latest_qos(lease_s: float | None) -> Qos:
     return _qos(Policy.History.KeepLast(1), Policy.Durability.TransientLocal, lease_s=lease_s)
 
 
+class DdsError(WbcError):
+    """Cyclone DDS refused a write or a take (the message is Cyclone's)."""
+
+
+def is_alive(sample: Any) -> bool:
+    """Whether the instance of a taken ``sample`` is alive (its writer has not gone: neither
+    disposed, nor lost its liveliness, nor been deleted)."""
+    return bool(sample.sample_info.instance_state == InstanceState.Alive)
+
+
 class ActionEndpoints:
     """One side's readers and writers on the topics of one action.
 
     A server reads the requests and writes the rest; a client the other way round. Made by
-    :meth:`for_server` or :meth:`for_client`; :meth:`close` deletes them.
+    :meth:`for_server` or :meth:`for_client`; :meth:`close` deletes them. A client's side also
+    holds a wait set on its readers (:meth:`wait`, :meth:`wake`).
 
     Attributes:
         names: The topic names.
@@ -180,6 +204,8 @@ class ActionEndpoints:
         self.topics: dict[str, Topic[Any]] = {}
         self.readers: dict[str, DataReader[Any]] = {}
         self.writers: dict[str, DataWriter[Any]] = {}
+        self._waitset: WaitSet | None = None
+        self._wait_entities: list[Any] = []
 
     @classmethod
     def for_server(cls, dds: DomainHandle, prefix: str, action_name: str, *,
@@ -200,7 +226,8 @@ class ActionEndpoints:
     def for_client(cls, dds: DomainHandle, prefix: str, action_name: str, *,
                    lease_s: float) -> ActionEndpoints:
         """The client's side: its readers first (so that the server's replies find them), then
-        its request writers, which offer liveliness with ``lease_s`` [s]."""
+        its request writers, which offer liveliness with ``lease_s`` [s]; a wait set on the
+        readers."""
         ends = cls(dds, prefix, action_name)
         ends._read("send_goal_response", SendGoalResponse, response_qos(None))
         ends._read("cancel_goal_response", CancelGoalResponse, response_qos(None))
@@ -209,7 +236,60 @@ class ActionEndpoints:
         ends._read("result", GoalResult, latest_qos(None))
         ends._write("send_goal_request", SendGoalRequest, request_qos(lease_s))
         ends._write("cancel_goal_request", CancelGoalRequest, request_qos(lease_s))
+        ends._waitset = WaitSet(ends._participant)
+        any_sample = SampleState.Any | ViewState.Any | InstanceState.Any
+        ends._wait_entities = [ReadCondition(reader, any_sample)
+                               for reader in ends.readers.values()]
+        ends._wait_entities.append(GuardCondition(ends._participant))
+        for condition in ends._wait_entities:
+            ends._waitset.attach(condition)
         return ends
+
+    def write(self, role: str, sample: Any) -> None:
+        """Write ``sample`` on the topic of ``role``.
+
+        Raises:
+            DdsError: Cyclone refused it (a full history past the blocking time, a deleted
+                writer).
+        """
+        try:
+            self.writers[role].write(sample)
+        except DDSException as err:
+            raise DdsError(str(err)) from err
+
+    def take(self, role: str, max_samples: int) -> list[Any]:
+        """Take at most ``max_samples`` samples of the topic of ``role`` (each with its
+        ``sample_info``; one whose ``valid_data`` is false carries only its key).
+
+        Raises:
+            DdsError: Cyclone refused the take.
+        """
+        try:
+            return self.readers[role].take(max_samples)
+        except DDSException as err:
+            raise DdsError(str(err)) from err
+
+    def wait(self, timeout_s: float) -> None:
+        """Block until a reader of a client's side holds a sample or :meth:`wake` is called,
+        at most ``timeout_s`` [s]."""
+        if self._waitset is not None:
+            self._waitset.wait(duration(seconds=timeout_s))
+
+    def wake(self) -> None:
+        """End a :meth:`wait` now and every one after (any thread)."""
+        if self._wait_entities:
+            self._wait_entities[-1].set(True)
+
+    def alive_writers(self, role: str) -> int:
+        """How many matched writers of the topic of ``role`` are alive (their liveliness
+        asserted within their lease)."""
+        return int(self.readers[role].get_liveliness_changed_status().alive_count)
+
+    def liveliness_refused(self, role: str) -> bool:
+        """Whether the last reader that refused the writer of ``role`` refused its liveliness
+        (a lease longer than it requests)."""
+        status = self.writers[role].get_offered_incompatible_qos_status()
+        return bool(status.total_count and status.last_policy_id == _LIVELINESS_POLICY_ID)
 
     def unmatched(self) -> list[str]:
         """The roles of this side's endpoints that match no endpoint of the other side yet."""
@@ -220,8 +300,10 @@ class ActionEndpoints:
         return missing
 
     def close(self) -> None:
-        """Delete the readers, writers and topics; idempotent."""
-        delete_entities(*self.readers.values(), *self.writers.values(), *self.topics.values())
+        """Delete the wait set, readers, writers and topics; idempotent."""
+        delete_entities(self._waitset, *self._wait_entities, *self.readers.values(),
+                        *self.writers.values(), *self.topics.values())
+        self._waitset, self._wait_entities = None, []
         self.readers, self.writers, self.topics = {}, {}, {}
 
     def _topic(self, role: str, data_type: type) -> Topic[Any]:
@@ -236,56 +318,19 @@ class ActionEndpoints:
         self.writers[role] = DataWriter(self._participant, self._topic(role, data_type), qos=qos)
 
 
-def publish_served_actions(dds: DomainHandle, prefix: str, served: dict[str, str], *,
-                           lease_s: float) -> DataWriter[ServedActions]:
-    """Write one server's entry of the directory under ``prefix``; the writer keeps it there
-    until deleted.
-
-    Args:
-        dds: The server's handle of the domain (its participant).
-        prefix: The topics' prefix.
-        served: Action name -> interface type name (``go2_interfaces/action/HighFive``).
-        lease_s: The server's liveliness lease [s].
-    """
-    topic: Topic[ServedActions] = Topic(dds.participant, served_topic_name(prefix),
-                                        ServedActions)
-    writer = DataWriter(dds.participant, topic, qos=latest_qos(lease_s))
-    names: Any = sorted(served)  # an IDL sequence to type checkers
-    types: Any = [served[name] for name in names]
-    writer.write(ServedActions(str(uuid.uuid4()), names, types))
-    return writer
-
-
-def served_actions_reader(dds: DomainHandle, prefix: str) -> DataReader[Any]:
-    """A reader of the directory of the servers under ``prefix`` (see :func:`served_actions`)."""
-    topic: Topic[ServedActions] = Topic(dds.participant, served_topic_name(prefix),
-                                        ServedActions)
-    return DataReader(dds.participant, topic, qos=latest_qos(None))
-
-
-def served_actions(reader: DataReader[Any]) -> list[str]:
-    """What the live servers of the directory serve, as sorted ``"name (type)"`` entries."""
-    entries = []
-    for sample in reader.read(256):
-        info = sample.sample_info
-        if info.valid_data and info.instance_state == InstanceState.Alive:
-            entries += [f"{name} ({kind})" for name, kind in
-                        zip(sample.action_names, sample.action_types, strict=False)]
-    return sorted(entries)
-
-
-def write_logged(writer: DataWriter[Any], sample: Any) -> None:
-    """Write ``sample``; a DDS error is logged, not raised (the control loop goes on)."""
+def write_logged(ends: ActionEndpoints, role: str, sample: Any) -> None:
+    """Write ``sample`` on ``role``; a DDS error is logged, not raised (the control loop goes
+    on)."""
     try:
-        writer.write(sample)
-    except DDSException:
+        ends.write(role, sample)
+    except DdsError:
         logger.exception("writing %r failed", sample)
 
 
-def unregister_instance(writer: DataWriter[Any], sample: Any) -> None:
-    """Unregister the instance of ``sample``'s key (its history is dropped); nothing if the
-    writer never wrote it."""
+def unregister_instance(ends: ActionEndpoints, role: str, sample: Any) -> None:
+    """Unregister the instance of ``sample``'s key on ``role`` (its history is dropped);
+    nothing if the writer never wrote it."""
     try:
-        writer.unregister_instance(sample)
+        ends.writers[role].unregister_instance(sample)
     except DDSException:
         pass
