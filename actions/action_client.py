@@ -295,7 +295,7 @@ class _Waiter:
             if self._runner.tick_count == ticks:
                 raise RunnerStalledError(
                     f"the spin hook {spinner!r} returned without ticking the runner; "
-                    "spin_once must advance the control loop and call runner.tick(now_s)"
+                    "spin_once must advance the control loop, ticking its runner at the loop's time"
                 )
         return future.result()
 
@@ -317,8 +317,8 @@ class _Waiter:
                     raise RunnerStalledError(
                         f"nothing is ticking the runner: no tick in {window:g} s (wall-clock) "
                         f"while waiting for {what}, and this thread registered no spin hook. "
-                        "Call runner.tick(now_s) from a control loop thread, or register the "
-                        "loop's spin_once with runner.set_spinner(...) on this thread"
+                        "Tick the runner at the loop's time from a control loop thread, or "
+                        "register the loop's spin_once with runner.set_spinner(...) on this thread"
                     ) from None
 
 

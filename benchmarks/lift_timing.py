@@ -149,17 +149,17 @@ def run_episode(controller: BalanceController, *, hold_s: float, stop_after_s: f
     """
     clocks = time.process_time(), time.perf_counter()
     wall = time.perf_counter()
-    runner = LiftLoop(controller)
+    lift_loop = LiftLoop(controller)
     run = TimedLift()
-    runner.warm_up()
+    lift_loop.warm_up()
     run.control_wall_s += time.perf_counter() - wall
-    lift = runner.start_lift(hold_s=hold_s, timing=timing)
+    lift = lift_loop.start_lift(hold_s=hold_s, timing=timing)
     phase_name = [""]
-    loop = runner.loop
+    loop = lift_loop.loop
     meter = MetricsHook(loop, lambda: phase_name[0], LEG) if quality else None
-    while runner.running(stop_after_s):
+    while lift_loop.running(stop_after_s):
         wall = time.perf_counter()
-        phase, _, _, out, cpu_s = runner.tick()
+        phase, _, _, out, cpu_s = lift_loop.tick()
         run.control_wall_s += time.perf_counter() - wall
         _record(run, controller, out, cpu_s)
         if meter is not None:  # measured on the truth
@@ -199,13 +199,13 @@ class Recording:
 def record_lift(*, hold_s: float, timing: LegLiftTiming | None) -> Recording:
     """The default controller lifts FR on the default plant and sensors; every lift tick's
     estimated state (what the controller read)."""
-    runner = LiftLoop(WholeBodyController())
-    runner.warm_up()
-    runner.start_lift(hold_s=hold_s, timing=timing)
+    lift_loop = LiftLoop(WholeBodyController())
+    lift_loop.warm_up()
+    lift_loop.start_lift(hold_s=hold_s, timing=timing)
     qs, vs, ts = [], [], []
-    while runner.running():
-        ts.append(runner.loop.sim.time_s)
-        _, q, v, _, _ = runner.tick()
+    while lift_loop.running():
+        ts.append(lift_loop.loop.sim.time_s)
+        _, q, v, _, _ = lift_loop.tick()
         qs.append(q)
         vs.append(v)
     return Recording(np.array(qs), np.array(vs), np.array(ts))
@@ -271,12 +271,12 @@ def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
                 ) -> list[dict[str, Any]]:
     """Tick times standing on four feet, then with FR held up (swing task on, then off)."""
     controller = factory()
-    runner = LiftLoop(controller)
+    lift_loop = LiftLoop(controller)
 
     def tick(n: int) -> tuple[list[float], list[float]]:
         times, cpu_times = [], []
         for _ in range(n):
-            _, _, _, out, cpu_s = runner.tick()
+            _, _, _, out, cpu_s = lift_loop.tick()
             times.append(out.timings["total"])
             cpu_times.append(cpu_s)
         return times, cpu_times
@@ -284,7 +284,7 @@ def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
     tick(WARMUP_TICKS)
     rows = [("4 contacts, standing", tick(ticks))]
     size4 = qp_size(controller)
-    lift = runner.start_lift(hold_s=1e3, timing=SCALING_TIMING)
+    lift = lift_loop.start_lift(hold_s=1e3, timing=SCALING_TIMING)
     while lift.phase is not LiftPhase.HOLDING:
         tick(1)
     tick(ticks)  # settle at the hold (untimed)
@@ -310,17 +310,17 @@ def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | N
     """
     runs: dict[str, tuple[LiftLoop, list[float]]] = {}
     for name, factory in ((DEFAULT, WholeBodyController), (PLACO, PlacoController)):
-        runner = LiftLoop(factory())
-        runner.warm_up()
-        runner.start_lift(hold_s=hold_s, timing=timing)
-        runs[name] = (runner, [])
+        lift_loop = LiftLoop(factory())
+        lift_loop.warm_up()
+        lift_loop.start_lift(hold_s=hold_s, timing=timing)
+        runs[name] = (lift_loop, [])
 
-    while any(runner.running(stop_after_s) for runner, _ in runs.values()):
-        for runner, samples in runs.values():
+    while any(lift_loop.running(stop_after_s) for lift_loop, _ in runs.values()):
+        for lift_loop, samples in runs.values():
             for _ in range(block_ticks):
-                if not runner.running(stop_after_s):
+                if not lift_loop.running(stop_after_s):
                     break
-                _, _, _, out, _ = runner.tick()
+                _, _, _, out, _ = lift_loop.tick()
                 samples.append(out.timings["total"])
     default, placo = runs[DEFAULT][1], runs[PLACO][1]
     blocks = min(len(default), len(placo)) // block_ticks

@@ -1,4 +1,6 @@
-"""The pieces of a control tick timed one by one (:class:`TimedTicks`), for the loop benchmark."""
+"""The control tick timed stage by stage (:class:`TimedTicks`), for the loop benchmark: the
+robot loop's own tick (:meth:`actions.robot.robot_loop.RobotLoop.tick`) with this benchmark's
+timer."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from actions.robot.robot_tick import Stage, StageTimes
 from sim.control_loop import ControlLoop
 
 #: Parts of a tick, in the order the loop runs them (``rest`` is split around physics).
@@ -18,11 +21,14 @@ PARTS = ("sensors", "estimator", "actions", "controller", "rest", "physics")
 
 
 class TimedTicks:
-    """The pieces of ``ControlLoop.spin_once``, called in its order and timed one by one.
+    """``ControlLoop.spin_once``'s tick, with a timer that marks each stage's end.
 
-    While :meth:`timing_mj_step` is active, ``mujoco.mj_step`` is wrapped to time each call
-    (about 0.1 us added to ``physics``), so that ``physics.mj_step`` is the steps the loop
-    really took, with the caches as the tick left them.
+    The parts, from the tick's stages (:class:`~actions.robot.robot_tick.Stage`):
+    ``sensors`` is ``READ``, ``estimator`` ``ESTIMATE``, ``actions`` ``ACTIONS``,
+    ``controller`` ``CONTROLLER``, ``physics`` ``WRITE``, ``rest`` ``GUARD`` with ``RELAY``
+    and ``HOOKS``. While :meth:`timing_mj_step` is active, ``mujoco.mj_step`` is wrapped to
+    time each call (about 0.1 us added to ``physics``), so that ``physics.mj_step`` is the
+    steps the loop really took, with the caches as the tick left them.
     """
 
     def __init__(self, loop: ControlLoop):
@@ -31,6 +37,7 @@ class TimedTicks:
         self.stages: dict[str, list[float]] = {}
         self.mj_step: list[float] = []
         self._stepped = 0.0  # seconds in mj_step since the last tick began
+        self._marks = StageTimes(time.perf_counter)
 
     @contextlib.contextmanager
     def timing_mj_step(self) -> Iterator[None]:
@@ -49,40 +56,23 @@ class TimedTicks:
             mujoco.mj_step = step
 
     def __call__(self) -> None:
-        loop, clock = self.loop, time.perf_counter
-        robot, context = loop.robot, loop.context
+        """One tick of the loop, timed."""
+        marks = self._marks
         self._stepped = 0.0
-        t0 = clock()
-        now = robot.time_s
-        if loop.estimator is None:
-            q, v = robot.read_state()
-            ts = clock()
-        else:
-            record = robot.read_sensors()
-            ts = clock()
-            q, v = loop.estimate_state(record)
-        t1 = clock()
-        context.observe(now, q, v)
-        loop.runner.tick(now)
-        t2 = clock()
-        raw = loop.command(q, v)
-        t3 = clock()
-        out = loop.guard(raw, v)
-        context.record_output(out)
-        loop.last_output = out
-        t4 = clock()
-        robot.write_command(out)
-        t5 = clock()
-        for hook in loop.hooks:
-            hook(loop, out)
-        t6 = clock()
-        for part, seconds in zip(PARTS, (ts - t0, t1 - ts, t2 - t1, t3 - t2,
-                                         (t4 - t3) + (t6 - t5), t5 - t4)):
-            self.samples[part].append(seconds)
-        self.samples["tick"].append(t6 - t0)
+        out = self.loop.tick(marks)
+        seconds = marks.seconds
+        samples = self.samples
+        samples["sensors"].append(seconds(Stage.READ))
+        samples["estimator"].append(seconds(Stage.ESTIMATE))
+        samples["actions"].append(seconds(Stage.ACTIONS))
+        samples["controller"].append(seconds(Stage.CONTROLLER))
+        samples["rest"].append(seconds(Stage.GUARD) + seconds(Stage.RELAY, Stage.HOOKS))
+        samples["physics"].append(seconds(Stage.WRITE))
+        samples["tick"].append(marks.ends_s[Stage.HOOKS] - marks.started_s)
         self.mj_step.append(self._stepped)
-        for stage, seconds in raw.timings.items():
-            self.stages.setdefault(stage, []).append(seconds)
+        if out is not None:
+            for stage, stage_s in out.timings.items():
+                self.stages.setdefault(stage, []).append(stage_s)
 
     def breakdown(self) -> dict[str, dict[str, float]]:
         """Per-part statistics [us]; ``controller.<stage>`` and ``physics.mj_step`` below."""

@@ -128,7 +128,7 @@ def test_spin_hook_that_does_not_tick_is_reported() -> None:
         client.send_goal_and_wait(HF)
     assert str(info.value) == (
         f"the spin hook {lazy_spin!r} returned without ticking the runner; "
-        "spin_once must advance the control loop and call runner.tick(now_s)"
+        "spin_once must advance the control loop, ticking its runner at the loop's time"
     )
 
 
@@ -334,9 +334,9 @@ def test_nothing_ticking_is_detected_by_a_stall_timeout() -> None:
         client.send_goal_and_wait(HF, stall_timeout_s=0.05)
     assert str(info.value) == (
         "nothing is ticking the runner: no tick in 0.05 s (wall-clock) while waiting for the "
-        "goal request to 'high_five', and this thread registered no spin hook. Call "
-        "runner.tick(now_s) from a control loop thread, or register the loop's spin_once with "
-        "runner.set_spinner(...) on this thread"
+        "goal request to 'high_five', and this thread registered no spin hook. Tick "
+        "the runner at the loop's time from a control loop thread, or register the loop's "
+        "spin_once with runner.set_spinner(...) on this thread"
     )
     assert isinstance(info.value, ActionTimeoutError)
     # the request is still queued: a later tick processes it

@@ -1,14 +1,19 @@
-"""Runs a :class:`~actions.robot.control_loop.ControlLoop` on the wall clock: a robot on DDS.
+"""Runs a robot loop (:class:`~actions.robot.robot_loop.RobotLoop`) on the wall clock: a robot
+on DDS.
 
-Each tick waits for its deadline (:class:`~actions.robot.deadline_clock.DeadlineClock`: 500 Hz
-by default, never bursting after a miss), then runs the loop's period in timed stages
-(:mod:`actions.robot.tick_stats`): read the newest state and estimate, tick the actions (and
-the stop phases of :mod:`actions.robot.rest_sequence`), run the controller, write the command,
-poll the DDS action bridge, run the hooks.
+Deadlines and alignment around the loop's one tick: each tick waits for its deadline
+(:class:`~actions.robot.deadline_clock.DeadlineClock`: 500 Hz by default, never bursting
+after a miss) and for the robot's state, then runs the loop's
+:meth:`~actions.robot.robot_loop.RobotLoop.tick` with a stage timer
+(:mod:`actions.robot.tick_stats`), two filters (the staleness watchdog,
+:class:`~actions.robot.state_watchdog.StateWatchdog`, and the stop phases of
+:mod:`actions.robot.rest_sequence`) and the DDS action bridge's poll as a relay; then its
+callbacks and Python's garbage collection.
 
 Phase: a robot sends its states on its own clock, at the same rate. Ticking just before a
 state arrives would answer every state a period late (and miss some). So, when the robot can
-say whether a state is waiting (``wait_for_new_state``, as
+say whether a state is waiting
+(:class:`~actions.robot.robot_capabilities.StateWaiting`, as
 :class:`~actions.robot.dds_robot.DdsRobot` can), each tick first waits up to ``align_s`` (by
 default :data:`DEFAULT_ALIGN_SHARE` of the period) for one, and the deadlines follow the
 states: later by the time waited (at most :data:`ALIGN_FOLLOW_S` a tick), or, when a state was
@@ -27,7 +32,8 @@ no fresh state for ``stale_after_s``. Either makes the loop fall back
 (:mod:`actions.robot.state_fallback`): the running goal ends ABORTED with the reason, the held
 torques decay to pure joint damping, and once fresh trustworthy states return a ``stand``
 goal stands the robot up before goals are accepted again. The loop sets the estimator's
-``trust_timeout_s`` to ``stale_after_s``, whose default is the robot's own (a
+``trust_timeout_s`` to ``stale_after_s``, whose default is the robot's own
+(:class:`~actions.robot.robot_capabilities.StalenessLimited`: a
 :class:`~actions.robot.dds_robot.DdsRobot`'s, from the rate measured at start: 40 ms at
 500 Hz, 100 ms at 200 Hz), else the estimator's.
 """
@@ -47,17 +53,23 @@ import numpy as np
 from actions.robot.deadline_clock import DEFAULT_SPIN_S, DeadlineClock
 from actions.robot.idle_collector import IdleCollector
 from actions.robot.rest_sequence import Phase, RestSequence, RestSettings
-from actions.robot.state_fallback import stream_note
+from actions.robot.robot_capabilities import (
+    CountsSkips,
+    ReportsStats,
+    SkipCounters,
+    StalenessLimited,
+    StateWaiting,
+)
+from actions.robot.robot_tick import Stage, StageTimes
+from actions.robot.state_watchdog import StateWatchdog
 from actions.robot.tick_stats import SERIES, TickStats
 from wbc.controller.control_output import ControlOutput
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import is_finite_real
 
 if TYPE_CHECKING:
-    from actions.robot.control_loop import ControlLoop
+    from actions.robot.robot_loop import RobotLoop
 
-#: The watchdog's limit [s] when the estimator has no ``trust_timeout_s``.
-DEFAULT_STALE_AFTER_S = 0.01
 #: A fixed wait [s] for the robot's state after a deadline (a quarter of a 500 Hz period).
 DEFAULT_ALIGN_S = 5e-4
 #: The default wait for the robot's state after a deadline, as a share of the period: a late
@@ -100,7 +112,7 @@ class RealtimeLoop:
             configured for, or an invalid limit.
     """
 
-    def __init__(self, loop: ControlLoop, *, rate_hz: float = 500.0, bridge: Any = None,
+    def __init__(self, loop: RobotLoop, *, rate_hz: float = 500.0, bridge: Any = None,
                  stale_after_s: float | None = None, rest: RestSettings | None = None,
                  align_s: float | None = None,
                  clock: Callable[[], float] = time.monotonic,
@@ -118,15 +130,15 @@ class RealtimeLoop:
                 f"rate_hz: the controller runs every {period:g} s ({1.0 / period:g} Hz), the "
                 f"loop was asked for {rate_hz:g} Hz; build the controller with "
                 f"control_period_s={1.0 / rate_hz:g}")
-        robot = getattr(loop.robot, "robot", loop.robot)
-        config = getattr(loop.estimator, "config", None)
+        robot = loop.robot.robot  # the robot itself, behind its MappedRobot
+        config = loop.estimator.config
         if stale_after_s is None:  # the robot's measured limit, else the estimator's
-            stale_after_s = getattr(robot, "stale_after_s", None) or getattr(
-                config, "trust_timeout_s", DEFAULT_STALE_AFTER_S)
+            stale_after_s = (robot.stale_after_s if isinstance(robot, StalenessLimited)
+                             else config.trust_timeout_s)
         if not is_finite_real(stale_after_s) or stale_after_s <= 0.0:
             raise ConfigurationError(
                 f"stale_after_s: expected seconds > 0, received {stale_after_s!r}")
-        if config is not None and config.trust_timeout_s != stale_after_s:
+        if config.trust_timeout_s != stale_after_s:
             # One limit: the estimator's trust limit is the watchdog's.
             loop.estimator.config = replace(config, trust_timeout_s=float(stale_after_s))
         if align_s is None:
@@ -139,7 +151,8 @@ class RealtimeLoop:
         self.rate_hz = float(rate_hz)
         #: Waits for the robot's next state (``None``: the robot cannot, or no alignment).
         self._state_wait: Callable[[float], bool] | None = (
-            getattr(robot, "wait_for_new_state", None) if align_s > 0.0 else None)
+            robot.wait_for_new_state if align_s > 0.0 and isinstance(robot, StateWaiting)
+            else None)
         self.align_s = float(align_s)
         #: Ticks whose wait for a state ended in vain; times the alignment paused.
         self.align_timeouts = 0
@@ -150,31 +163,38 @@ class RealtimeLoop:
         self.stale_after_s = float(stale_after_s)
         self.deadlines = DeadlineClock(1.0 / rate_hz, clock=clock, sleep=sleep, spin_s=spin_s)
         self.stats = TickStats(window_ticks=round(rate_hz))
+        #: The staleness watchdog (built from a sample, or WAITING: damping).
+        self.watchdog = StateWatchdog(self.stale_after_s, since_s=loop.robot.time_s,
+                                      robot=robot, stats=self.stats)
         #: Python's garbage collection, at the end of each tick while :meth:`run` runs.
         self.collector = IdleCollector()
         self._collecting = False
         self.rest = RestSequence(loop, rest)
+        #: The tick's filters and relays (module doc), and its stage timer.
+        self._filters = (self.watchdog, self.rest)
+        self._relays = () if bridge is None else (bridge.poll,)
+        self._marks = StageTimes(timer)
         #: Called every tick, in the hooks stage, with this object (logs, status).
         self.callbacks: list[Callable[[RealtimeLoop], None]] = []
         self._clock = clock
         self._timer = timer
         self._cpu = cpu_clock
+        self._robot = robot
         #: This tick's times [s] by :data:`~actions.robot.tick_stats.SERIES` (being filled).
         self.times = np.zeros(len(SERIES))
         #: The previous tick's times [s], complete.
         self.last_times = np.full(len(SERIES), math.nan)
-        #: The last tick had a fresh state; its command (``None`` while damping).
-        self.fresh = False
+        #: The last tick's command (``None`` while damping).
         self.last_output: ControlOutput | None = None
         #: Whether the last tick overran the next deadline.
         self.missed = False
-        self._last_fresh_s = loop.robot.time_s  # built from a sample, or WAITING (damping)
-        self._stale = False
         self._started = False
         self._status_mark = (math.nan, 0, 0, 0)
-        #: The robot's counters (``ticks_skipped``), if it keeps them; its skipped ticks when
-        #: the first tick had read (those before are the start-up's, not the loop's).
-        self._robot_counters = getattr(robot, "counters", None)
+        #: The robot's skipped states when the first tick had read, if it counts them
+        #: (:class:`~actions.robot.robot_capabilities.CountsSkips`; those before the first
+        #: tick are the start-up's, not the loop's).
+        self._robot_counters: SkipCounters | None = (
+            robot.counters if isinstance(robot, CountsSkips) else None)
         self._skipped_at_start: int | None = None
 
     # -- running ----------------------------------------------------------------------------
@@ -217,20 +237,46 @@ class RealtimeLoop:
             finally:
                 self._collecting = False
 
+    @property
+    def fresh(self) -> bool:
+        """The last tick had a fresh state."""
+        return self.watchdog.fresh
+
     def tick(self) -> None:
-        """Wait for the deadline, run one period, account for it."""
+        """Wait for the deadline and the robot's state, run the loop's tick, its callbacks
+        and the garbage collection, account for it."""
         if not self._started:
             self.start()
         wake_s = self.deadlines.wait()
         align_s = self._align()
+        marks, timer, times = self._marks, self._timer, self.times
+        self.last_times[:] = times
+        c0 = self._cpu()
         try:
-            self._tick_body(wake_s, align_s)
+            self.last_output = self.loop.tick(marks, self._filters, self._relays)
+            if self._skipped_at_start is None:
+                self._skipped_at_start = self._robot_skipped()
+            for callback in self.callbacks:
+                callback(self)
+            t_hooks = timer()
+            if self._collecting:  # in the time left before the next deadline
+                self.collector.collect(self.deadlines.time_left_s())
+            t_gc = timer()
         except BaseException:
             with contextlib.suppress(Exception):  # the tick's own error is the one to raise
                 self.loop.robot.write_command(self.rest.damping)
             raise
+        ends, t0 = marks.ends_s, marks.started_s
+        times[_READ] = ends[Stage.ESTIMATE] - t0
+        times[_ACTIONS] = ends[Stage.ACTIONS] - ends[Stage.ESTIMATE]
+        times[_CONTROLLER] = ends[Stage.GUARD] - ends[Stage.ACTIONS]
+        times[_WRITE] = ends[Stage.WRITE] - ends[Stage.GUARD]
+        times[_BRIDGE] = ends[Stage.RELAY] - ends[Stage.WRITE]
+        times[_HOOKS], times[_GC] = t_hooks - ends[Stage.RELAY], t_gc - t_hooks
+        times[_TICK], times[_CPU] = t_gc - t0, self._cpu() - c0
+        times[_LATENCY], times[_WAKE], times[_ALIGN] = ends[Stage.WRITE] - t0, wake_s, align_s
         self.missed = self.deadlines.tick_done()
-        self.stats.add(self.times, fresh=self.fresh, missed=self.missed)
+        self.stats.add(times, fresh=self.fresh, missed=self.missed)
 
     def _align(self) -> float:
         """Wait for the robot's state, move the deadlines to it (module doc); the wait [s]."""
@@ -258,64 +304,10 @@ class RealtimeLoop:
             self._align_window = (self.stats.ticks, self.align_timeouts)
         return waited
 
-    def _tick_body(self, wake_s: float, align_s: float) -> None:
-        loop, timer, times = self.loop, self._timer, self.times
-        self.last_times[:] = times
-        c0, t0 = self._cpu(), timer()
-        now = loop.robot.time_s
-        record = loop.robot.read_sensors()
-        if self._skipped_at_start is None:
-            self._skipped_at_start = getattr(self._robot_counters, "ticks_skipped", 0)
-        q, v = loop.estimate_state(record)
-        loop.context.observe(now, q, v)
-        self.fresh = record is not None
-        if self.fresh:
-            self._last_fresh_s = now
-        t1 = timer()
-        phase = self.rest.step(now)
-        out: ControlOutput | None = None
-        if phase < Phase.DAMPING:
-            loop.runner.tick(now)
-            t2 = timer()
-            out = loop.guard(loop.command(q, v, stale=self._watchdog(now)), v)
-            loop.context.record_output(out)
-            loop.last_output = out
-            t3 = timer()
-            loop.robot.write_command(out)
-        else:
-            t2 = t3 = timer()
-            loop.robot.write_command(self.rest.damping)
-        self.last_output = out
-        t4 = timer()
-        if self.bridge is not None:
-            self.bridge.poll()
-        t5 = timer()
-        if out is not None:
-            for hook in loop.hooks:
-                hook(loop, out)
-        for callback in self.callbacks:
-            callback(self)
-        t6 = timer()
-        if self._collecting:  # in the time left before the next deadline
-            self.collector.collect(self.deadlines.time_left_s())
-        t7 = timer()
-        times[_READ], times[_ACTIONS], times[_CONTROLLER] = t1 - t0, t2 - t1, t3 - t2
-        times[_WRITE], times[_BRIDGE], times[_HOOKS] = t4 - t3, t5 - t4, t6 - t5
-        times[_GC], times[_TICK], times[_CPU] = t7 - t6, t7 - t0, self._cpu() - c0
-        times[_LATENCY], times[_WAKE], times[_ALIGN] = t4 - t0, wake_s, align_s
-
-    def _watchdog(self, now_s: float) -> str:
-        """Why the state is stale after ``stale_after_s`` without a fresh one ('' when it is
-        not): the loop then falls back (:mod:`actions.robot.state_fallback`)."""
-        stale_s = now_s - self._last_fresh_s
-        if stale_s <= self.stale_after_s:
-            self._stale = False
-            return ""
-        if not self._stale:
-            self._stale = True
-            self.stats.watchdog_trips += 1
-        return (f"watchdog: no fresh robot state for {stale_s * 1e3:.0f} ms (limit "
-                f"{self.stale_after_s * 1e3:g} ms)" + stream_note(self.loop.robot))
+    def _robot_skipped(self) -> int:
+        """The robot's ``counters.ticks_skipped`` (0 when it does not count them)."""
+        counters = self._robot_counters
+        return 0 if counters is None else counters.ticks_skipped
 
     # -- reporting --------------------------------------------------------------------------
 
@@ -352,14 +344,14 @@ class RealtimeLoop:
         """The robot's states no tick read, counted from the first tick (two came within one
         tick: the older is skipped); the robot's own ``ticks_skipped`` also counts those sent
         while the loop was being built."""
-        skipped = getattr(self._robot_counters, "ticks_skipped", 0)
+        skipped = self._robot_skipped()
         return skipped - (skipped if self._skipped_at_start is None else self._skipped_at_start)
 
     def report(self) -> dict[str, Any]:
         """The run's figures for a JSON report: rate, counters, per-stage timing [ms], the
         robot's counters, how it stopped, every goal's terminal event."""
-        robot = getattr(self.loop.robot, "robot", self.loop.robot)
-        robot_stats = robot.stats() if hasattr(robot, "stats") else {}
+        robot = self._robot
+        robot_stats = robot.stats() if isinstance(robot, ReportsStats) else {}
         ended = ("succeeded", "canceled", "aborted", "rejected")
         return {
             "rate_hz": self.rate_hz, "duration_s": self.loop.robot.time_s,

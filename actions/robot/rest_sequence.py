@@ -1,11 +1,14 @@
 """Start and stop a robot's control loop safely: stand a robot that is down, and bring it to
-rest before the controller exits.
+rest before the controller exits. A filter of the loop's tick
+(:class:`~actions.robot.robot_tick.TickFilter`): from ``DAMPING`` on, its damping command
+replaces the tick's decision.
 
 Stopping (:meth:`RestSequence.request_stop`), in phases, one control tick at a time:
 
 1. ``UNWINDING``: every running goal is canceled and unwinds as its server defines (a high
    five puts the foot down). A goal that arrives meanwhile is canceled too.
-2. ``SITTING``: a ``sit`` goal lowers the body to the lying pose.
+2. ``SITTING``: a ``sit`` goal lowers the body to the lying pose (the robot's sit goal,
+   :meth:`~actions.robot.loop_behaviours.LoopBehaviours.sit_goal`).
 3. ``DAMPING``: the action runner is shut down (new goals are rejected) and the motors get a
    pure damping command (no stiffness, no torque) for ``damp_s``.
 4. ``DONE``: the loop may exit.
@@ -24,9 +27,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from actions.go2.go2_actions import SIT_ACTION
-from actions.go2.go2_interfaces import SitGoal
-from actions.go2.robot_context import STANDING_HEIGHT_M
 from actions.goal_status import GoalStatus
 from actions.robot.state_fallback import send_stand
 from wbc.core.errors import ConfigurationError
@@ -36,7 +36,7 @@ from wbc.robot_io.motor_command import MotorCommand
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
-    from actions.robot.control_loop import ControlLoop
+    from actions.robot.robot_loop import RobotLoop
 
 
 class Phase(enum.IntEnum):
@@ -54,8 +54,9 @@ class RestSettings:
     """How a loop starts and comes to rest.
 
     Attributes:
-        stand_on_start: Stand the robot up first if its base is below
-            :data:`~actions.go2.robot_context.STANDING_HEIGHT_M`.
+        stand_on_start: Stand the robot up first if its base is below its standing height
+            (:attr:`~actions.robot.loop_behaviours.LoopBehaviours.standing_height_m`: the
+            GO2's :data:`~actions.go2.robot_context.STANDING_HEIGHT_M`).
         stand_s: Duration [s] of that stand.
         sit_s: Duration [s] of the sit when stopping.
         damping_kd: Joint damping [N m s/rad] of the final command (no stiffness, no torque).
@@ -89,11 +90,12 @@ def damping_command(kd: float) -> MotorCommand:
 class RestSequence:
     """The start-up stand and the stop phases of one loop (see the module doc).
 
-    Call :meth:`step` on the loop's thread at the start of every tick, before the runner's
-    tick; :meth:`request_stop` from anywhere (a signal handler included: it only counts).
+    Pass it to the loop's tick as a filter (:meth:`sensed` steps it after sensing, before
+    the runner's tick), or call :meth:`step` on the loop's thread at the start of every tick;
+    :meth:`request_stop` from anywhere (a signal handler included: it only counts).
     """
 
-    def __init__(self, loop: ControlLoop, settings: RestSettings | None = None) -> None:
+    def __init__(self, loop: RobotLoop, settings: RestSettings | None = None) -> None:
         self.loop = loop
         self.settings = settings or RestSettings()
         self.phase = Phase.RUNNING
@@ -115,7 +117,7 @@ class RestSequence:
         it was sent now."""
         if (self.stand is not None or not self.settings.stand_on_start
                 or self.loop.context.goal_refusal  # not controlling: the loop stands it
-                or self.loop.context.q[2] >= STANDING_HEIGHT_M):
+                or self.loop.context.q[2] >= self.loop.behaviours.standing_height_m):
             return False
         self.stand = send_stand(self.loop, self.settings.stand_s)
         return True
@@ -124,6 +126,15 @@ class RestSequence:
         """Ask the loop to come to rest (a second request: damp now). Any thread."""
         self._reasons.append(reason)
         self._requests += 1
+
+    def sensed(self, now_s: float, fresh: bool) -> MotorCommand | None:
+        """The tick's filter: :meth:`step`; from ``DAMPING`` on, the damping command that
+        replaces the tick's decision (``None`` before: the loop decides)."""
+        return self.damping if self.step(now_s) >= Phase.DAMPING else None
+
+    def stale(self, now_s: float) -> str:
+        """The tick's filter: the rest sequence never finds the state stale ('')."""
+        return ""
 
     def step(self, now_s: float) -> Phase:
         """Advance the phases at robot time ``now_s`` [s]; return the current one."""
@@ -161,8 +172,8 @@ class RestSequence:
                 self._note(f"canceled {record.label}")
                 self.loop.runner.submit_cancel(record)
         if not goals:
-            self._sit = self.loop.client(SIT_ACTION).send_goal_async(
-                SitGoal(duration_s=self.settings.sit_s))
+            action, goal = self.loop.behaviours.sit_goal(self.settings.sit_s)
+            self._sit = self.loop.client(action).send_goal_async(goal)
             self.phase = Phase.SITTING
 
     def _sitting(self, now_s: float) -> None:

@@ -41,9 +41,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from actions.go2.go2_actions import STAND_ACTION
-from actions.go2.go2_interfaces import StandGoal
 from actions.goal_status import GoalStatus
+from actions.robot.robot_capabilities import DescribesStream
 from wbc.controller.control_output import ControlOutput, ControlStatus
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import is_finite_real
@@ -54,7 +53,8 @@ if TYPE_CHECKING:
     from actions.action_runner import ActionRunner
     from actions.client_goal_handle import ClientGoalHandle
     from actions.go2.robot_context import RobotContext
-    from actions.robot.robot_interface import RobotInterface
+    from actions.robot.loop_behaviours import LoopBehaviours
+    from actions.robot.robot_interface import MappedRobot
     from wbc.controller.balance_controller import BalanceController
     from wbc.estimation.state_estimator import EstimatorBase
 
@@ -176,23 +176,27 @@ def elapsed_since(log: ModeLog, now_s: float) -> float:
 
 
 class StandLoop(Protocol):
-    """A loop that serves the ``stand`` action."""
+    """A loop that serves its robot's ``stand`` action."""
+
+    behaviours: LoopBehaviours
 
     def client(self, action_name: str) -> ActionClient:
         """An action client on the loop's runner."""
 
 
 def send_stand(loop: StandLoop, duration_s: float) -> Future[ClientGoalHandle]:
-    """Send ``loop`` a ``stand`` goal of ``duration_s`` [s]: the posture transition to standing
-    from wherever the robot is (a foot in the air is put down first)."""
-    return loop.client(STAND_ACTION).send_goal_async(StandGoal(duration_s=duration_s))
+    """Send ``loop`` its robot's stand goal of ``duration_s`` [s]
+    (:meth:`~actions.robot.loop_behaviours.LoopBehaviours.stand_goal`: the GO2's posture
+    transition to standing from wherever the robot is, a foot in the air put down first)."""
+    action, goal = loop.behaviours.stand_goal(duration_s)
+    return loop.client(action).send_goal_async(goal)
 
 
 class FallbackLoop(StandLoop, Protocol):
     """What :class:`StateFallback` uses of its loop
     (:class:`~actions.robot.control_loop.ControlLoop`)."""
 
-    robot: RobotInterface
+    robot: MappedRobot
     controller: BalanceController
     context: RobotContext
     runner: ActionRunner
@@ -265,7 +269,7 @@ class StateFallback:
         return (f"state estimate: no trustworthy sensor sample for "
                 f"{estimate.untrusted_s * 1e3:.0f} ms (limit "
                 f"{estimator.config.trust_timeout_s * 1e3:g} ms): {estimate.faults}"
-                + stream_note(self.loop.robot))
+                + stream_note(self.loop.robot.robot))
 
 
     def _lose(self, reason: str, v: np.ndarray, now_s: float) -> None:
@@ -299,8 +303,9 @@ class StateFallback:
         self._send_stand()
 
     def _send_stand(self) -> None:
-        self.loop.context.admit_once = StandGoal
-        self._stand = send_stand(self.loop, self.settings.stand_s)
+        action, goal = self.loop.behaviours.stand_goal(self.settings.stand_s)
+        self.loop.context.admit_once = type(goal)  # the one goal admitted while refusing
+        self._stand = self.loop.client(action).send_goal_async(goal)
 
     def _follow_stand(self, now_s: float) -> None:
         future = self._stand
@@ -320,9 +325,11 @@ class StateFallback:
 
 
 def stream_note(robot: object) -> str:
-    """'; ' and what the robot's stream brought that was not new (states that keep arriving
-    but never change, dropped frames), when the robot says (a ``DdsRobot``); else ''."""
-    robot = getattr(robot, "robot", robot)  # the robot behind a MappedRobot
-    reason = getattr(robot, "stale_reason", None)
-    note = reason() if callable(reason) else ""
+    """'; ' and what ``robot``'s stream brought that was not new (states that keep arriving
+    but never change, dropped frames), when it says
+    (:class:`~actions.robot.robot_capabilities.DescribesStream`: a ``DdsRobot``); else ''.
+
+    ``robot`` is the robot itself (a loop's ``robot.robot``, behind its ``MappedRobot``).
+    """
+    note = robot.stale_reason() if isinstance(robot, DescribesStream) else ""
     return f"; {note}" if note else ""

@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from actions.goal_status import GoalStatus
 from actions.robot.rest_sequence import Phase
+from actions.robot.robot_capabilities import AnswersTicks
 from actions.robot.tick_stats import SERIES
 from wbc.controller.control_output import ControlStatus
 from wbc.model.description import JOINT_NAMES, LEGS
@@ -50,6 +51,14 @@ COLUMNS: dict[str, tuple[tuple[int, ...], str]] = {
 }
 
 
+@runtime_checkable
+class FootTargets(Protocol):
+    """A controller that says where a swing foot is going (the whole-body controller)."""
+
+    def foot_target(self, leg: str) -> np.ndarray | None:
+        """The world target [m] of ``leg``'s foot while it swings (``None``: none)."""
+
+
 class TickLog:
     """Records one row per tick of a :class:`~actions.robot.realtime_loop.RealtimeLoop`.
 
@@ -62,6 +71,10 @@ class TickLog:
         self._row = CHUNK_TICKS  # no chunk yet
         self._actions: tuple[str, ...] = ()
         self._pending: tuple[dict[str, np.ndarray], int] | None = None
+        #: What the loop's robot and controller declare, found at the first row.
+        self._ticks: AnswersTicks | None = None
+        self._targets: FootTargets | None = None
+        self._declared = False
 
     def __len__(self) -> int:
         return 0 if not self._chunks else (len(self._chunks) - 1) * CHUNK_TICKS + self._row
@@ -77,10 +90,14 @@ class TickLog:
         self._row += 1
         self._pending = (chunk, i)
         loop = rt.loop
-        robot = getattr(loop.robot, "robot", loop.robot)
+        if not self._declared:  # once: an isinstance on a protocol costs microseconds
+            self._declared = True
+            robot, controller = loop.robot.robot, loop.controller
+            self._ticks = robot if isinstance(robot, AnswersTicks) else None
+            self._targets = controller if isinstance(controller, FootTargets) else None
         estimator = loop.estimator
         chunk["t_s"][i] = loop.context.now_s
-        chunk["state_tick"][i] = getattr(robot, "answer_tick", -1)
+        chunk["state_tick"][i] = -1 if self._ticks is None else self._ticks.answer_tick
         chunk["fresh"][i] = rt.fresh
         chunk["q"][i] = loop.context.q
         chunk["v"][i] = loop.context.v
@@ -88,14 +105,14 @@ class TickLog:
         out = rt.last_output
         chunk["control_status"][i] = -1 if out is None else _STATUSES.index(out.status)
         chunk["tau_ff"][i] = math.nan if out is None else out.tau_ff
-        controller = loop.controller
-        stance = controller.schedule.stance
+        stance = loop.controller.schedule.stance
         targets = chunk["foot_target"][i]
         targets[:] = math.nan
+        with_targets = self._targets
         for k, leg in enumerate(LEGS):
             chunk["swing"][i, k] = not stance[k]
-            if not stance[k] and hasattr(controller, "foot_target"):
-                target = controller.foot_target(leg)
+            if not stance[k] and with_targets is not None:
+                target = with_targets.foot_target(leg)
                 if target is not None:
                     targets[k] = target
         chunk["phase"][i] = int(rt.rest.phase)
