@@ -20,9 +20,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from cyclonedds.pub import DataWriter
-from cyclonedds.sub import DataReader
-from cyclonedds.topic import Topic
 
 from benchmarks.reporting import json_safe, machine
 from wbc.robot_io.dds.c_layout import (
@@ -31,7 +28,7 @@ from wbc.robot_io.dds.c_layout import (
     low_state_crc,
     sdk_default_low_cmd,
 )
-from wbc.robot_io.dds.domain_config import DomainHandle, delete_entities, join_domain
+from wbc.robot_io.dds.domain_config import DomainHandle, join_domain
 from wbc.robot_io.dds.go2_types import LowCmd_, LowState_
 from wbc.robot_io.dds.low_cmd_conversion import (
     low_cmd_from_sdk_command,
@@ -41,6 +38,7 @@ from wbc.robot_io.dds.low_state_conversion import (
     low_state_from_sensor_record,
     sensor_record_from_low_state,
 )
+from wbc.robot_io.dds.topic_endpoints import TopicReader, TopicWriter
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
 from wbc.robot_io.motor_command import MotorCommand
 from wbc.robot_io.sdk_motor_command import SdkMotorCommand
@@ -129,22 +127,19 @@ def single_rows(repeats: int) -> list[dict[str, Any]]:
 def _write_take(writer_dds: DomainHandle, reader_dds: DomainHandle, topic_name: str,
                 data_type: type, sample: Any, repeats: int) -> dict[str, Any]:
     """Time ``write`` then ``take`` of ``sample`` to a reader of a second participant."""
-    writer: DataWriter[Any] = DataWriter(
-        writer_dds.participant, Topic(writer_dds.participant, topic_name, data_type))
-    reader: DataReader[Any] = DataReader(
-        reader_dds.participant, Topic(reader_dds.participant, topic_name, data_type))
-    deadline = time.monotonic() + 2.0
-    while (writer.get_publication_matched_status().current_count == 0
-           and time.monotonic() < deadline):
-        time.sleep(0.001)
+    writer = TopicWriter(writer_dds, topic_name, data_type)
+    reader = TopicReader(reader_dds, topic_name, data_type)
+    writer.wait_for_reader(2.0)
+    write, take = writer.write, reader.take
     taken: list[Any] = []
 
     def write_take() -> None:
-        writer.write(sample)
-        taken.extend(reader.take())
+        write(sample)
+        taken.extend(take())
 
     timing = timed(write_take, repeats)
-    delete_entities(reader, writer)
+    reader.close()
+    writer.close()
     return {"operation": f"write + take {topic_name}", "class": data_type.__name__,
             "us": timing, "taken": len(taken), "written": repeats + max(1, repeats // 10)}
 

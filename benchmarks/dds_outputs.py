@@ -16,16 +16,15 @@ from typing import Any
 
 import numpy as np
 import yaml
-from cyclonedds.core import Policy, Qos
-from cyclonedds.sub import DataReader
-from cyclonedds.topic import Topic
 
 from actions.go2.robot_context import STANDING_HEIGHT_M
 from benchmarks.dds_processes import POLL_S, wait_until
 from sim.dds_evaluation import LOADED_FOOT_N
-from sim.sim_truth import SIM_TRUTH_TOPIC, SimTruthMessage
 from wbc.core.errors import ConfigurationError
-from wbc.robot_io.dds.domain_config import delete_entities, join_domain
+from wbc.robot_io.dds.domain_config import join_domain
+from wbc.robot_io.dds.sdk_qos import sdk_reader_qos
+from wbc.robot_io.dds.sim_truth import SIM_TRUTH_TOPIC, SimTruthMessage
+from wbc.robot_io.dds.topic_endpoints import TopicReader
 
 _FEEDBACK = re.compile(r"^Feedback \[\s*([-\d.]+) s\]: (.*)$", re.MULTILINE)
 _EVENT = re.compile(r"^\[\s*([-\d.]+) s\] (.*)$", re.MULTILINE)
@@ -269,11 +268,8 @@ class TruthMonitor:
 
     def __init__(self, domain_id: int, interface: str = "lo") -> None:
         self._dds = join_domain(interface, domain_id=domain_id)
-        participant = self._dds.participant
-        message_type: Any = SimTruthMessage  # cyclonedds' hints know only IdlStruct types
-        self._reader = DataReader(
-            participant, Topic(participant, SIM_TRUTH_TOPIC, message_type),
-            qos=Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1)))
+        self._reader = TopicReader(self._dds, SIM_TRUTH_TOPIC, SimTruthMessage,
+                                   qos=sdk_reader_qos())
         self._latest: np.ndarray | None = None
         #: When the newest sample was taken [s] (``time.monotonic``).
         self.taken_s = math.nan
@@ -286,10 +282,10 @@ class TruthMonitor:
 
     def latest(self) -> np.ndarray | None:
         """The newest sample received (a copy), ``None`` before the first."""
-        for sample in self._reader.take(N=4):
-            if sample.sample_info.valid_data:
-                self._latest = np.array(sample.record, copy=True)
-                self.taken_s = time.monotonic()
+        sample = self._reader.take_newest(4)
+        if sample is not None:
+            self._latest = np.array(sample.record, copy=True)
+            self.taken_s = time.monotonic()
         return self._latest
 
     def wait_for(self, condition: Callable[[np.ndarray], bool], *, timeout_s: float,
@@ -327,5 +323,5 @@ class TruthMonitor:
     def close(self) -> None:
         """Delete the reader and leave the domain; idempotent."""
         if not self._dds.is_closed:
-            delete_entities(self._reader)
+            self._reader.close()
             self._dds.close()

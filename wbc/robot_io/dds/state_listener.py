@@ -15,15 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from cyclonedds.core import (
-    InstanceState,
-    Policy,
-    Qos,
-    ReadCondition,
-    SampleState,
-    ViewState,
-    WaitSet,
-)
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
@@ -31,6 +23,7 @@ from cyclonedds.util import duration
 from wbc.core.validation import as_float
 from wbc.robot_io.dds.domain_config import delete_entities, join_domain
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
+from wbc.robot_io.dds.sdk_qos import sdk_reader_qos
 from wbc.robot_io.dds.wire_message import LowCmdMessage, LowStateMessage
 
 #: States held between two takes: a 1 kHz robot sends 50 in the longest wait here (50 ms).
@@ -88,7 +81,7 @@ class StateListener:
         self._dds = join_domain(interface, domain_id=domain_id)
         try:
             participant = self._dds.participant
-            history = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(_HISTORY))
+            history = sdk_reader_qos(_HISTORY)  # unitree_sdk2's reader, a deep history
             state_topic = Topic(participant, LOW_STATE_TOPIC, LowStateMessage)
             cmd_topic = Topic(participant, LOW_CMD_TOPIC, LowCmdMessage)
             self._states = DataReader(participant, state_topic, qos=history)
