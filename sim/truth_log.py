@@ -7,18 +7,19 @@ from typing import Any
 
 import numpy as np
 
-from sim.sim_truth import SIM_TRUTH_DTYPE
 from wbc.model.description import JOINT_NAMES, LEGS
+from wbc.robot_io.dds.sim_truth import SIM_TRUTH_DTYPE
 
 
 class TruthLog:
-    """Copies of :data:`sim.sim_truth.SIM_TRUTH_DTYPE` records, in chunks (440 B a sample:
-    about 0.8 GB an hour at 500 Hz).
+    """Copies of :data:`wbc.robot_io.dds.sim_truth.SIM_TRUTH_DTYPE` records, in chunks (440 B a
+    sample: about 0.8 GB an hour at 500 Hz).
 
     :meth:`arrays` gives the fields of ``rt/wbc/sim/truth`` as arrays with one row a sample:
     ``tick`` (n,), ``t_s`` (n,), ``q`` (n, 19), ``v`` (n, 18), ``foot_position_m``
-    (n, 4, 3), ``foot_force_n`` (n, 4), in the conventions of :mod:`sim.sim_truth`, with
-    ``joint_names`` (12,) and ``leg_names`` (4,) for the orders.
+    (n, 4, 3), ``foot_force_n`` (n, 4), in the conventions of
+    :mod:`wbc.robot_io.dds.sim_truth`, with ``joint_names`` (12,) and ``leg_names`` (4,) for the
+    orders.
     """
 
     _CHUNK = 4096

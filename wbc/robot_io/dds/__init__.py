@@ -1,4 +1,6 @@
-"""The GO2's low-level DDS messages (``rt/lowcmd``, ``rt/lowstate``) for Eclipse Cyclone DDS.
+"""The GO2's wire on Eclipse Cyclone DDS: its messages (``rt/lowcmd``, ``rt/lowstate``, the
+simulator's truth), both ends of the topic pair, the SDK's QoS, the domains, and the actions'
+DDS transport. The one home of ``cyclonedds``: no module outside this package imports it.
 
 Modules (import them directly; this package re-exports nothing):
 
@@ -13,4 +15,12 @@ Modules (import them directly; this package re-exports nothing):
 - :mod:`~wbc.robot_io.dds.domain_config`: a domain bound to one network interface, joined
   through :func:`~wbc.robot_io.dds.domain_config.join_domain` (one configuration per domain id
   and process, shared by every :class:`~wbc.robot_io.dds.domain_config.DomainHandle`).
+- :mod:`~wbc.robot_io.dds.sdk_qos`: unitree_sdk2's QoS, one copy for both ends.
+- :mod:`~wbc.robot_io.dds.controller_end`: ``ControllerEnd`` (``rt/lowstate`` read,
+  ``rt/lowcmd`` written); :mod:`~wbc.robot_io.dds.robot_end`: ``RobotEnd`` (``rt/lowcmd`` read,
+  ``rt/lowstate`` and the truth written); :mod:`~wbc.robot_io.dds.sim_truth`: the truth's type.
+- :mod:`~wbc.robot_io.dds.state_listener`: the bring-up check's readers.
+- :mod:`~wbc.robot_io.dds.action_messages`, :mod:`~wbc.robot_io.dds.action_endpoints`,
+  :mod:`~wbc.robot_io.dds.served_directory`: actions over DDS (JSON payload topics).
+- :mod:`~wbc.robot_io.dds.topic_endpoints`: a reader or writer of any one topic (tools).
 """
