@@ -12,7 +12,8 @@ of the two real-time factors. Each rate and state gets two episodes on fresh loo
 timed from the goal's sending to its result, as the command line times a run:
 
 1. Per-tick breakdown: the runner ticks with :class:`benchmarks.timed_ticks.TimedTicks`, which
-   calls the pieces ``spin_once`` calls, in its order, timed one by one (listed below).
+   runs the loop's own tick (``spin_once``'s) with a timer that marks each stage's end (the
+   parts below).
 2. Real-time factor: ``ControlLoop.spin_once`` until the result, as the command line drives
    it; sim time over wall time, and the process's CPU time over that wall time (well below
    1: other processes took the cores). It runs second, so that it measures the loop rather
@@ -24,9 +25,9 @@ The parts of a tick:
 - ``sensors``: ``robot.read_sensors()`` (the simulated sensors, their noise, the joint and
   leg orders); with ``--state truth``, ``robot.read_state()`` (MuJoCo to Pinocchio);
 - ``estimator``: ``loop.estimate_state`` (the contact schedule, the state estimator's tick,
-  the copies of ``q`` and ``v``); nothing with ``--state truth``;
-- ``actions``: ``context.observe`` and ``runner.tick`` (the action servers and the
-  behaviours: the high five's phases and balance watch);
+  the copies of ``q`` and ``v``; nothing with ``--state truth``) and ``context.observe``;
+- ``actions``: the action runner's tick (the action servers and the behaviours: the high
+  five's phases and balance watch);
 - ``controller``: ``controller.step``, and below it the stages its
   ``ControlOutput.timings`` report (whatever their names);
 - ``physics``: ``robot.write_command`` (the command's checks and joint order, the motor
@@ -227,8 +228,8 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
             ("Real-time factor: sim time over wall time from the goal's sending to its result, "
              "ControlLoop.spin_once as go2-wbc runs it; cpu share: process CPU time over that "
              "wall time."),
-            ("Per-tick parts [us] from a second episode whose loop calls spin_once's pieces "
-             "with perf_counter around each (see the module docstring); physics.mj_step "
+            ("Per-tick parts [us] from a second episode whose loop ticks with a stage timer "
+             "(perf_counter at each stage's end; see the module docstring); physics.mj_step "
              "times the mujoco.mj_step calls of the tick; 'around controller' is the tick "
              "less controller.step. Medians do not add up: each is its own part's."),
             ("Fresh process: a new interpreter builds the loop and runs, at 1 kHz, its first "

@@ -5,9 +5,10 @@ which builds the MuJoCo plant, its sensors and the default controller around the
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Protocol, runtime_checkable
 
 from actions.action_runner import BusyPolicy
-from actions.robot.control_loop import ControlLoop as RobotLoop
+from actions.robot.control_loop import ControlLoop as Go2Loop
 from actions.robot.control_loop import TickHook
 from actions.robot.robot_interface import STATE_SOURCES, RobotInterface
 from sim.disturbances import DelayedRobot
@@ -22,13 +23,21 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import check_name
 from wbc.estimation.state_estimator import EstimatorBase
 
-__all__ = ["PHYSICS_TIMESTEP_S", "ControlLoop", "TickHook"]
+__all__ = ["PHYSICS_TIMESTEP_S", "ControlLoop", "SimulatedLoop", "TickHook"]
 
 #: Default physics timestep [s] of a simulated loop.
 PHYSICS_TIMESTEP_S = 1e-3
 
 
-class ControlLoop(RobotLoop):
+@runtime_checkable
+class SimulatedLoop(Protocol):
+    """A loop on a MuJoCo GO2 (one built by :meth:`ControlLoop.simulated`): its simulator is
+    :attr:`sim` (a loop built on a robot directly has none)."""
+
+    sim: Go2Simulator
+
+
+class ControlLoop(Go2Loop):
     """The robot loop on a simulated GO2, whose simulator is :attr:`sim`.
 
     Example:
@@ -94,8 +103,8 @@ class ControlLoop(RobotLoop):
                                 foot_full_scale=plant_robot.sensors.model.foot_force_full_scale)
         if controller is None:
             controller = WholeBodyController(solver={"control_period_s": control_period_s})
-        period = getattr(controller, "control_period_s", None)  # the BalanceController protocol's
-        if period is not None and abs(period - control_period_s) > 1e-12:
+        period = controller.control_period_s
+        if abs(period - control_period_s) > 1e-12:
             raise ConfigurationError(
                 f"control_period_s: the controller is configured for {period:g} s, the loop "
                 f"for {control_period_s:g} s; give both the same period")

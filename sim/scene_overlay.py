@@ -174,7 +174,9 @@ class SceneOverlay:
         if "forces" in self.overlays and loop.last_output is not None:
             self._draw_forces(scene, loop, loop.last_output.forces, FORCE_RGBA, width=0.015,
                               offset_m=0.0)
-        if "measured" in self.overlays and hasattr(loop, "sim"):
+        from sim.control_loop import SimulatedLoop  # loaded with the loop already
+
+        if "measured" in self.overlays and isinstance(loop, SimulatedLoop):
             measured = loop.sim.foot_contact_force_array()
             self._draw_forces(scene, loop, measured, MEASURED_RGBA, width=0.007,
                               offset_m=0.035)

@@ -1,6 +1,6 @@
 """What a robot may offer beyond the :class:`~actions.robot.robot_interface.RobotInterface`,
-declared as protocols: the robot loop asks ``isinstance(robot, StateWaiting)``, never
-``getattr(robot, "wait_for_new_state", None)``.
+declared as protocols: the robot loop asks ``isinstance(robot, StateWaiting)``; it never
+looks a member up by name to find out what a robot can do.
 
 A robot offers a capability by having its members (the protocols are structural): a
 :class:`~actions.robot.dds_robot.DdsRobot` has them all; a simulated robot none. Each
