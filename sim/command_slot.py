@@ -101,7 +101,7 @@ class CommandSlot:
                                     kd=np.full(12, DAMPING_KD), tau_ff=zeros.copy())
         #: The mode now: :data:`STAND`, :data:`COMMAND` or :data:`DAMPING`.
         self.mode = STAND
-        #: ``(from, to)`` when the last :meth:`update` changed the mode, else ``None``.
+        #: ``(from, to)`` when the last :meth:`step` changed the mode, else ``None``.
         self.transition: tuple[str, str] | None = None
         #: Commands applied (taken, and through the delay line).
         self.applied = 0
@@ -121,7 +121,7 @@ class CommandSlot:
         """The command the drivers apply now."""
         return {STAND: self.stand, COMMAND: self._command, DAMPING: self.damping}[self.mode]
 
-    def update(self, newest: MotorCommand | None, *, now_s: float) -> MotorCommand:
+    def step(self, newest: MotorCommand | None, *, now_s: float) -> MotorCommand:
         """The drivers' command for this physics step.
 
         Args:

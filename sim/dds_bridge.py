@@ -276,7 +276,7 @@ class DdsBridge:
                 self._publish(wire)
             now = self._clock()
             newest = self.framing.applied(self._intake.take(now), self.sim)
-            command = self.slot.update(newest, now_s=now)
+            command = self.slot.step(newest, now_s=now)
             stats, slot = self.stats, self.slot
             stats.commands_applied, stats.timeouts = slot.applied, slot.timeouts
             stats.commands_in_flight = slot.in_flight

@@ -222,7 +222,7 @@ def test_command_slot_stands_then_commands_then_damps_on_timeout() -> None:
     command = MotorCommand.pure_torque(np.full(12, 1.0))
     modes = []
     for k in range(110):
-        applied = slot.update(command if k in (0, 1) else None, now_s=k * DT)
+        applied = slot.step(command if k in (0, 1) else None, now_s=k * DT)
         modes.append(slot.mode)
         if k < 2:
             assert applied is slot.stand  # still in the delay line
@@ -230,9 +230,9 @@ def test_command_slot_stands_then_commands_then_damps_on_timeout() -> None:
     assert slot.applied == 2 and slot.in_flight == 0
     # The last command was applied at step 3 (t = 3 ms): damping once 0.1 s have passed.
     assert modes.index(DAMPING) == 104 and slot.timeouts == 1
-    assert slot.update(command, now_s=0.2) is slot.damping  # in the delay line
-    assert slot.update(None, now_s=0.201) is slot.damping
-    assert slot.update(None, now_s=0.202) is command and slot.transition == (DAMPING, COMMAND)
+    assert slot.step(command, now_s=0.2) is slot.damping  # in the delay line
+    assert slot.step(None, now_s=0.201) is slot.damping
+    assert slot.step(None, now_s=0.202) is command and slot.transition == (DAMPING, COMMAND)
 
 
 def test_stats_count_lost_repeated_and_unmatched_replies() -> None:

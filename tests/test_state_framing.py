@@ -100,12 +100,12 @@ def test_gaps_are_seeded_and_last_10_to_50_ms():
 
 def test_a_unitree_slot_applies_no_torque_first_and_holds_the_last_command():
     slot = CommandSlot(None, timeout_s=None)
-    first = slot.update(None, now_s=0.0)
+    first = slot.step(None, now_s=0.0)
     assert slot.mode == STAND and not (first.kp.any() or first.kd.any() or first.tau_ff.any())
     command = MotorCommand(q_des=np.zeros(12), dq_des=np.zeros(12), kp=np.zeros(12),
                            kd=np.zeros(12), tau_ff=np.full(12, 3.0))
-    slot.update(command, now_s=1.0)
-    assert slot.update(None, now_s=1000.0) is command and slot.mode == COMMAND
+    slot.step(command, now_s=1.0)
+    assert slot.step(None, now_s=1000.0) is command and slot.mode == COMMAND
 
 
 @pytest.mark.parametrize("argv, expected", [
