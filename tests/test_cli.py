@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import dataclasses
 import io
@@ -403,18 +404,27 @@ def test_every_option_says_its_default(capsys):
         main(["high-five", "--help"])
     assert exc.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
+    with pytest.raises(SystemExit) as exc:
+        main(["high-five", "--set", "help"])
+    assert exc.value.code == 0
+    text += " " + " ".join(capsys.readouterr().out.split())
     for phrase in ("--height M foot height above the ground [m], in [0.10, 0.50] (default: 0.40)",
                    ("--hold S seconds to hold the foot up [s], a whole number in [0, 60] "
                     "(default: 2)"),
-                   "--fps N video frame rate [1/s] of simulated time (default: 30)",
-                   "--video-size WxH video frame size in pixels (default: 640x480)",
+                   "video.fps video frame rate [1/s] of simulated time (default: 30)",
+                   "video.size video frame size in pixels, WxH (default: 640x480)",
                    "3 the action server rejected the goal"):
         assert phrase in text
     subparsers = parser._subparsers._group_actions[0].choices  # argparse keeps them here
     for name, sub in subparsers.items():
         for action in sub._actions:
+            if action.help == argparse.SUPPRESS:  # a kept or removed flag: --set says it
+                continue
             if action.option_strings and action.dest != "help":
                 assert "default" in action.help, (name, action.option_strings)
+            if action.dest == "settings":  # every setting, too
+                for setting in action.settings.values():
+                    assert "default" in setting.help, (name, setting.path)
 
 
 # ------------------------------------------------------------------------ the installed command
@@ -466,9 +476,9 @@ def test_stand_pd_runs_the_ideal_plant_at_the_control_rate():
 def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
     report = tmp_path / "r.json"
     code, out = run(["high-five", "--height", "0.25", "--hold", "0", "--plant", "identified",
-                     "--plant-param", "calf_friction_loss=1.4", "--plant-param",
-                     "payload_offset_m=0.05,0,0", "--control-rate", "500", "--report",
-                     str(report)])
+                     "--set", "plant.calf_friction_loss=1.4", "--set",
+                     "plant.payload_offset_m=0.05,0,0", "--set", "run.control_rate_hz=500",
+                     "--report", str(report)])
     assert code == EXIT_SUCCEEDED, out
     first = out.splitlines()[1]
     assert first.startswith("plant identified + calf_friction_loss=1.4, "
@@ -489,19 +499,21 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
 @pytest.mark.parametrize(("argv", "message"), [
     (["--plant", "real"], ("--plant: invalid choice: 'real' (choose from 'menagerie', "
                            "'unitree-mujoco', 'identified', 'ideal')")),
-    (["--plant-param", "knee_damping=1"],
-     ("--plant-param: unknown plant parameter 'knee_damping'; valid plant parameters: "
-      + ", ".join(Plant.parameter_names()))),
-    (["--plant-param", "joint_damping=-1"],
-     "--plant-param: joint_damping: expected a value in [0, 10], received -1"),
-    (["--plant-param", "calf_friction_loss=9"],
-     "--plant-param: calf_friction_loss: expected a value in [0, 5], received 9"),
-    (["--plant-param", "payload_offset_m=0.1,0"],
-     ("--plant-param: payload_offset_m: expected three numbers (x, y, z) [m], received "
+    (["--set", "plant.knee_damping=1"],
+     ("--set: unknown setting 'plant.knee_damping' in 'plant.knee_damping=1' (did you mean "
+      "'plant.joint_damping'?); valid plant settings: "
+      + ", ".join(f"plant.{name}" for name in Plant.parameter_names()))),
+    (["--set", "plant.joint_damping=-1"],
+     "--set plant.joint_damping: expected a value in [0, 10], received -1"),
+    (["--set", "plant.calf_friction_loss=9"],
+     "--set plant.calf_friction_loss: expected a value in [0, 5], received 9"),
+    (["--set", "plant.payload_offset_m=0.1,0"],
+     ("--set plant.payload_offset_m: expected three numbers (x, y, z) [m], received "
       "(0.1, 0.0)")),
-    (["--plant-param", "cone=round"],
-     "--plant-param: unknown cone 'round'; valid cones: elliptic, pyramidal"),
-    (["--plant-param", "foo"], "--plant-param: expected NAME=VALUE, received 'foo'"),
+    (["--set", "plant.cone=round"],
+     "--set plant.cone: unknown cone 'round'; valid cones: elliptic, pyramidal"),
+    (["--set", "foo"], ("--set: expected SECTION.FIELD=VALUE (e.g. "
+                        "estimator.trust_timeout_s=0.05), received 'foo'")),
     (["--control-rate", "300", "--physics-dt", "0.001"],
      ("--control-rate: 300 Hz with --physics-dt 0.001 s: control_period_s: expected a whole "
       "number of physics steps of 0.001 s (e.g. 0.001, 0.002, 0.004 s), received "
@@ -514,17 +526,20 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
     (["--state", "exact"], "--state: invalid choice: 'exact' (choose from 'estimate', 'truth')"),
     (["--sensors", "perfect"], ("--sensors: invalid choice: 'perfect' (choose from 'go2', "
                                 "'exact')")),
-    (["--sensor-param", "gyro=1"],
-     ("--sensor-param: unknown sensor parameter 'gyro'; valid sensor parameters: "
-      "gyro_noise_rad_s, gyro_bias_rad_s, gyro_bias_walk, accel_noise_m_s2, accel_bias_m_s2, "
-      "accel_bias_walk, attitude_time_constant_s, joint_position_noise_rad, "
-      "joint_position_resolution_rad, joint_velocity_noise_rad_s, joint_torque_noise_nm, "
-      "foot_force_offset, foot_force_gain, foot_force_noise, foot_force_full_scale, "
-      "foot_force_integer")),
-    (["--sensor-param", "gyro_noise_rad_s=nan"],
-     "--sensor-param: gyro_noise_rad_s: expected a finite number, received nan"),
-    (["--sensor-param", "gyro_noise_rad_s=high"],
-     "--sensor-param: gyro_noise_rad_s: expected a number, received 'high'"),
+    (["--set", "sensors.gyro=1"],
+     ("--set: unknown setting 'sensors.gyro' in 'sensors.gyro=1' (did you mean "
+      "'sensors.gyro_bias_walk'?); valid sensors settings: "
+      "sensors.gyro_noise_rad_s, sensors.gyro_bias_rad_s, sensors.gyro_bias_walk, "
+      "sensors.accel_noise_m_s2, sensors.accel_bias_m_s2, sensors.accel_bias_walk, "
+      "sensors.attitude_time_constant_s, sensors.joint_position_noise_rad, "
+      "sensors.joint_position_resolution_rad, sensors.joint_velocity_noise_rad_s, "
+      "sensors.joint_torque_noise_nm, sensors.foot_force_offset, sensors.foot_force_gain, "
+      "sensors.foot_force_noise, sensors.foot_force_full_scale, sensors.foot_force_integer, "
+      "sensors.seed, sensors.fault")),
+    (["--set", "sensors.gyro_noise_rad_s=nan"],
+     "--set sensors.gyro_noise_rad_s: expected a finite number, received nan"),
+    (["--set", "sensors.gyro_noise_rad_s=high"],
+     "--set sensors.gyro_noise_rad_s: expected a number, received 'high'"),
     (["--sensor-fault", "blackout,1,0.1"],
      ("--sensor-fault: unknown sensor fault 'blackout'; valid sensor faults: "
       + ", ".join(FAULT_KINDS))),
@@ -535,11 +550,12 @@ def test_plant_parameters_and_500_hz_reach_the_run_and_the_report(tmp_path):
     (["--sensor-fault", "foot_zero,1,0.1,XL"],
      "--sensor-fault: unknown leg 'XL'; valid legs: FL, FR, RL, RR"),
     (["--estimator", "ukf"], "--estimator: invalid choice: 'ukf' (choose from 'inekf', 'kf')"),
-    (["--estimator-param", "trust=1"],
-     ("--estimator-param: unknown estimator parameter(s) ['trust']; valid parameters: "
-      "quaternion_tolerance, ")),
-    (["--estimator-param", "trust_timeout_s=-1"],
-     "--estimator-param: trust_timeout_s: expected a value in [0, 10], received -1"),
+    (["--set", "estimator.trust=1"],
+     ("--set: unknown setting 'estimator.trust' in 'estimator.trust=1' (did you mean "
+      "'estimator.trust_timeout_s'?); valid estimator settings: "
+      "estimator.quaternion_tolerance, ")),
+    (["--set", "estimator.trust_timeout_s=-1"],
+     "--set estimator.trust_timeout_s: expected a value in [0, 10], received -1"),
     (["--command-delay", "0.0025"],
      ("--command-delay: expected a whole number of control periods of 0.001 s (e.g. 0.001, "
       "0.009), received 0.0025")),
@@ -564,8 +580,8 @@ def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
     assert "estimate vs truth" not in out
     report = tmp_path / "fault.json"
     code, out = run(["high-five", "--hold", "1", "--sensor-fault", "dropout,3.3,0.02",
-                     "--sensor-param", "gyro_noise_rad_s=0.01", "--command-delay", "0.002",
-                     "--estimator", "kf", "--estimator-param", "use_foot_force=false",
+                     "--set", "sensors.gyro_noise_rad_s=0.01", "--command-delay", "0.002",
+                     "--estimator", "kf", "--set", "estimator.use_foot_force=false",
                      "--report", str(report)])
     assert code == EXIT_NOT_SUCCEEDED, out
     lines = out.splitlines()
@@ -586,14 +602,14 @@ def test_truth_state_exact_sensors_and_a_fault_reach_the_run(tmp_path):
 
 
 def test_stand_pd_checks_the_plant_and_rate_options_too(capsys):
-    line = usage_error(["stand-pd", "--plant-param", "joint_damping=-1"], capsys)
-    assert line.startswith("go2-wbc stand-pd: error: --plant-param: joint_damping: expected")
+    line = usage_error(["stand-pd", "--set", "plant.joint_damping=-1"], capsys)
+    assert line.startswith("go2-wbc stand-pd: error: --set plant.joint_damping: expected")
 
 
 def test_plant_parameters_are_parsed_by_name():
     parser = build_parser()
-    args = parser.parse_args(["sit", "--plant-param", "condim=4", "--plant-param",
-                              "cone=pyramidal", "--plant-param", "payload_offset_m=0.1,0,-0.02",
+    args = parser.parse_args(["sit", "--set", "plant.condim=4", "--set",
+                              "plant.cone=pyramidal", "--set", "plant.payload_offset_m=0.1,0,-0.02",
                               "--control-rate", "2000", "--physics-dt", "0.0005"])
     assert args.plant_param == [("condim", 4), ("cone", "pyramidal"),
                                 ("payload_offset_m", (0.1, 0.0, -0.02))]

@@ -307,10 +307,9 @@ def test_the_loop_gives_the_estimator_its_staleness_limit():
 
 
 def test_run_dds_refuses_a_second_staleness_limit(capsys):
-    args = build_parser().parse_args(["run", "--dds", "--estimator-param",
-                                      "trust_timeout_s=0.5"])
-    with pytest.raises(SystemExit) as caught:
-        run_dds(args)
+    with pytest.raises(SystemExit) as caught:  # refused where --set is read
+        run_dds(build_parser().parse_args(["run", "--dds", "--set",
+                                           "estimator.trust_timeout_s=0.5"]))
     assert caught.value.code == 2
-    assert ("--estimator-param: trust_timeout_s: set by --stale-after (one limit for the "
+    assert ("--set estimator.trust_timeout_s: set by --stale-after (one limit for the "
             "watchdog and the estimator)") in capsys.readouterr().err

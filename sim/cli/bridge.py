@@ -19,9 +19,10 @@ from sim.bridge_config import (
     BridgeConfig,
     steps_per_state,
 )
-from sim.cli.arg_types import float_in, output_file, plant_param, sensor_param, whole_in
+from sim.cli.arg_types import float_in, output_file, whole_in
 from sim.cli.dds_options import add_dds_options, add_priority_option
 from sim.cli.exit_codes import EXIT_NOT_SUCCEEDED, EXIT_SUCCEEDED, EXIT_UNAVAILABLE, EXIT_USAGE
+from sim.cli.settings import add_settings
 from sim.command_slot import DAMPING_KD, DEFAULT_COMMAND_TIMEOUT_S, STAND_KD, STAND_KP
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
@@ -66,7 +67,7 @@ exit status:
 """
 #: The option that sets each :class:`BridgeConfig` field.
 _OPTIONS = {"domain_id": "--domain", "interface": "--interface", "rate_hz": "--rate",
-            "plant": "--plant-param", "sensors": "--sensor-param",
+            "plant": "--set plant", "sensors": "--set sensors",
             "sensor_seed": "--sensor-seed", "command_delay_s": "--command-delay",
             "command_timeout_s": "--command-timeout", "pose": "--pose",
             "framing": "--framing"}
@@ -106,17 +107,10 @@ def add_bridge_command(sub: Any) -> argparse.ArgumentParser:
     sim = bridge.add_argument_group("simulation")
     sim.add_argument("--plant", choices=tuple(PLANT_PRESETS), default=DEFAULT_PLANT,
                      help=f"the simulated GO2's joints and contacts (default: {DEFAULT_PLANT})")
-    sim.add_argument("--plant-param", type=plant_param, action="append", default=[],
-                     metavar="NAME=VALUE",
-                     help="change one plant parameter, repeatable, as go2-wbc high-five's "
-                          "(default: the preset's values)")
     sim.add_argument("--sensors", choices=tuple(SENSOR_PRESETS), default=DEFAULT_SENSORS,
                      help=f"what the simulated GO2 measures (default: {DEFAULT_SENSORS}: noise "
                           "and biases; 'exact': none)")
-    sim.add_argument("--sensor-param", type=sensor_param, action="append", default=[],
-                     metavar="NAME=VALUE",
-                     help="change one sensor parameter, repeatable (default: the preset's "
-                          "values)")
+    add_settings(bridge, sim, ("plant", "sensors"))
     sim.add_argument("--sensor-seed", type=whole_in(0, 2**31 - 1, what="a seed"), default=0,
                      metavar="N", help="seed of the sensors' noise and biases (default: 0)")
     sim.add_argument("--command-delay", type=float_in(0.0, 0.1, what="a delay", unit="s",
@@ -169,6 +163,9 @@ def bridge_config(args: argparse.Namespace) -> BridgeConfig:
         field, _, detail = str(err).partition(": ")
         option = _OPTIONS.get(field)
         parser: argparse.ArgumentParser = args.parser
+        name, sep, rest = detail.partition(": ")
+        if option and option.startswith("--set ") and sep and " " not in name:
+            option, detail = f"{option}.{name}", rest  # the setting's path, as it was given
         parser.error(f"{option}: {detail}" if option else str(err))
 
 

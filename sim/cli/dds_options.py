@@ -77,5 +77,8 @@ def check_dds_options(args: argparse.Namespace) -> None:
         if dest in DDS_KEEPS or not action.option_strings:
             continue
         if getattr(args, dest, action.default) != action.default:
-            parser.error(f"{action.option_strings[-1]}: a simulation option, not used with "
+            option = action.option_strings[-1]
+            if dest == "settings":  # --set: the first path given
+                option = f"--set {args.settings[0]}"
+            parser.error(f"{option}: a simulation option, not used with "
                          "--dds (the robot on DDS is not simulated here)")

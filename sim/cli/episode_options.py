@@ -12,11 +12,16 @@ from sim.episode_runner import VIDEO_FPS, VIDEO_SIZE
 from sim.scene_overlay import DEFAULT_OVERLAYS
 from sim.video_recorder import choose_offscreen_gl
 
-#: The option that sets each episode field, where the two names differ.
-_OPTIONS = {"plant": "--plant-param", "plant_params": "--plant-param",
-            "sensors": "--sensor-param", "sensor_params": "--sensor-param",
-            "estimator_params": "--estimator-param", "command_delay_s": "--command-delay",
-            "calibrate_s": "--calibrate"}
+#: The setting that changes each episode field by name, where a field takes several.
+_SECTIONS = {"plant": "plant", "plant_params": "plant", "sensors": "sensors",
+             "sensor_params": "sensors", "estimator_params": "estimator",
+             "controller_params": "controller"}
+#: The kept flag and the setting of each episode field that one sets.
+_SETTINGS = {"command_delay_s": ("--command-delay", "command_delay", "run.command_delay_s"),
+             "calibrate_s": ("--calibrate", "calibrate", "run.calibrate_s"),
+             "sensor_seed": ("--sensor-seed", "sensor_seed", "sensors.seed"),
+             "sensor_faults": ("--sensor-fault", "sensor_fault", "sensors.fault"),
+             "start_pose": ("--start-pose", "start_pose", "run.start_pose")}
 
 
 def check_options(args: argparse.Namespace) -> None:
@@ -34,11 +39,11 @@ def check_options(args: argparse.Namespace) -> None:
     for option, needs in (("fps", "video"), ("video_size", "video"),
                           ("push_at", "push"), ("push_dir", "push")):
         if getattr(args, option) is not None and getattr(args, needs) is None:
-            args.parser.error(f"--{option.replace('_', '-')}: only used with --{needs}")
+            args.parser.error(f"{_named(args, option)}: only used with --{needs}")
     if args.overlay is not None and args.video is None and not args.viewer:
-        args.parser.error("--overlay: only used with --video or --viewer")
+        args.parser.error(f"{_named(args, 'overlay')}: only used with --video or --viewer")
     if args.viewer_exit and not args.viewer:
-        args.parser.error("--viewer-exit: only used with --viewer")
+        args.parser.error(f"{_named(args, 'viewer_exit')}: only used with --viewer")
     args.overlay = DEFAULT_OVERLAYS if args.overlay is None else args.overlay
     args.fps = args.fps or VIDEO_FPS
     args.video_size = args.video_size or VIDEO_SIZE
@@ -60,6 +65,12 @@ def goal_episode(args: argparse.Namespace, action: str, goal: Any, **changes: An
     return args.episode.replace(**fields, **changes)
 
 
+def _named(args: argparse.Namespace, dest: str) -> str:
+    """How the user set ``dest``: ``--set PATH`` when a ``--set`` did, else its flag."""
+    path = getattr(args, "set_by", {}).get(dest)
+    return f"--set {path}" if path else f"--{dest.replace('_', '-')}"
+
+
 def _episode(args: argparse.Namespace) -> Episode:
     fields: dict[str, Any] = {
         "action": None, "plant": args.plant, "plant_params": args.plant_param,
@@ -69,7 +80,8 @@ def _episode(args: argparse.Namespace) -> Episode:
                       sensor_seed=args.sensor_seed, state=args.state, estimator=args.estimator,
                       estimator_params=args.estimator_param,
                       sensor_faults=tuple(args.sensor_fault), command_delay_s=args.command_delay,
-                      calibrate_s=args.calibrate or 0.0)
+                      calibrate_s=args.calibrate or 0.0,
+                      controller_params=tuple(args.controller_param))
     try:
         return Episode(**fields)
     except EpisodeError as err:
@@ -84,7 +96,14 @@ def _usage(err: EpisodeError, args: argparse.Namespace) -> str:
         period = 1.0 / args.control_rate
         physics = args.physics_dt if args.physics_dt is not None else min(
             PHYSICS_TIMESTEP_S, period)
-        return (f"--control-rate: {args.control_rate:g} Hz with --physics-dt {physics:g} s: "
-                f"{err}")
-    option = _OPTIONS.get(err.field, f"--{err.field.replace('_', '-')}")
-    return f"{option}: {err.detail}"
+        return (f"{_named(args, 'control_rate')}: {args.control_rate:g} Hz with --physics-dt "
+                f"{physics:g} s: {err}")
+    if err.field in _SECTIONS:  # "name: expected ..." names the setting's path
+        name, sep, detail = err.detail.partition(": ")
+        if sep and " " not in name:
+            return f"--set {_SECTIONS[err.field]}.{name}: {detail}"
+        return f"--set {_SECTIONS[err.field]}: {err.detail}"
+    if err.field in _SETTINGS:
+        flag, dest, path = _SETTINGS[err.field]
+        return f"{f'--set {path}' if dest in getattr(args, 'set_by', {}) else flag}: {err.detail}"
+    return f"--{err.field.replace('_', '-')}: {err.detail}"

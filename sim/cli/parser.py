@@ -17,6 +17,7 @@ from sim.cli.exit_codes import EXIT_CODES_HELP
 from sim.cli.options import CliParser, add_plant_options, run_options
 from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
+from sim.cli.settings import add_settings
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
 from sim.episode import episode_default
 from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
@@ -26,13 +27,15 @@ examples:
   go2-wbc high-five                         # 0.40 m, hold 2 s, headless
   go2-wbc high-five --height 0.3 --hold 0 --metrics
   go2-wbc high-five --video hf.mp4 --plot hf.png --report hf.json --log hf.npz
-  go2-wbc high-five --viewer --overlay all  # CoM, support polygon, forces, foot target
-  go2-wbc high-five --push 40,0.1 --push-at 3 --push-dir 90
+  go2-wbc high-five --viewer --set video.overlay=all  # CoM, polygon, forces, foot target
+  go2-wbc high-five --push 40,0.1 --set push.at_s=3 --set push.dir_deg=90
   go2-wbc high-five --cancel-at 2.5         # ends CANCELED with the foot down
   go2-wbc stand; go2-wbc sit --duration 1.5
   go2-wbc trajectory wave.yaml              # format: go2-wbc trajectory --help
-  go2-wbc high-five --plant identified --plant-param calf_friction_loss=1.4
-  go2-wbc high-five --control-rate 500      # the GO2's usual low-level rate
+  go2-wbc high-five --plant identified --set plant.calf_friction_loss=1.4
+  go2-wbc high-five --set run.control_rate_hz=500   # the GO2's usual low-level rate
+  go2-wbc high-five --set estimator.trust_timeout_s=0.05 --set controller.gains.com_kp=200
+  go2-wbc high-five --set help              # every setting, its unit and default
   go2-wbc run --dds; go2-wbc high-five --dds  # a controller on DDS and a goal to it
 
 """
@@ -99,7 +102,9 @@ def build_parser() -> argparse.ArgumentParser:
                                                       fmt="g"),
                           default=3.0, metavar="S",
                           help="simulated seconds [s], in [0.001, 60] (default: 3.0)")
-    add_plant_options(stand_pd.add_argument_group("simulation"))
+    simulation = stand_pd.add_argument_group("simulation")
+    add_plant_options(simulation)
+    add_settings(stand_pd, simulation, ("plant", "rates"))
     stand_pd.set_defaults(run=goal_commands.stand_pd, parser=stand_pd)
     add_action_commands(sub)
     sub.choices["send-goal"].set_defaults(dds_run=dds_goal.send_goal)

@@ -17,7 +17,7 @@ import sys
 from typing import IO, Any
 
 from actions.robot.realtime_priority import CONTROLLER_PRIORITY, RealtimeScheduling
-from sim.cli.arg_types import estimator_param, float_in, output_file
+from sim.cli.arg_types import float_in, output_file
 from sim.cli.dds_options import add_dds_options, add_priority_option
 from sim.cli.exit_codes import (
     EXIT_CODES_HELP,
@@ -26,6 +26,7 @@ from sim.cli.exit_codes import (
     EXIT_UNAVAILABLE,
     EXIT_USAGE,
 )
+from sim.cli.settings import add_settings
 from wbc.core.errors import ConfigurationError
 from wbc.estimation.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
 from wbc.robot_io.unitree_sdk import SDK_LEG_MOTORS
@@ -34,6 +35,8 @@ from wbc.robot_io.unitree_sdk import SDK_LEG_MOTORS
 RATES_HZ = (500, 1000)
 #: Default longest wait [s] for the robot's first state.
 WAIT_S = 5.0
+#: Why ``run`` refuses ``--set estimator.trust_timeout_s``.
+_STALE_SET_BY = "set by --stale-after (one limit for the watchdog and the estimator)"
 
 RUN_HELP = """\
 examples:
@@ -106,9 +109,9 @@ def add_run_command(sub: Any) -> None:
                                        "given or default one)")
     dds.add_argument("--estimator", choices=tuple(ESTIMATORS), default=DEFAULT_ESTIMATOR,
                      help=f"the state estimator (default: {DEFAULT_ESTIMATOR})")
-    dds.add_argument("--estimator-param", type=estimator_param, action="append", default=[],
-                     metavar="NAME=VALUE", help="change one estimator parameter, repeatable "
-                                               "(default: the estimator's values)")
+    add_settings(run, dds, ("estimator", "controller"), refused={
+        "estimator.trust_timeout_s": _STALE_SET_BY,
+        "controller.solver.control_period_s": "set by --control-rate"})
     out = run.add_argument_group("outputs")
     out.add_argument("--report", type=output_file(".json"), metavar="FILE.json",
                      help="write the run's figures: rate, deadline misses, per-stage tick "
@@ -133,6 +136,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     from actions.robot.rest_sequence import RestSettings
     from actions.robot.tick_log import TickLog
     from sim.episode_loop import startup_objects_frozen
+    from wbc.controller.controller_config import ControllerConfig
     from wbc.controller.whole_body_controller import WholeBodyController
     from wbc.estimation.estimators import make_estimator
 
@@ -143,16 +147,20 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         out.flush()
 
     period_s = 1.0 / args.control_rate
-    params = dict(args.estimator_param)
-    if "trust_timeout_s" in params:
-        args.parser.error("--estimator-param: trust_timeout_s: set by --stale-after (one limit "
-                          "for the watchdog and the estimator)")
+    params = dict(args.estimator_param)  # --set refused trust_timeout_s: _STALE_SET_BY
+    try:
+        config = ControllerConfig(solver={"control_period_s": period_s}).with_values(
+            dict(args.controller_param))
+    except ConfigurationError as err:
+        args.parser.error(f"--set controller.{err}")
     robot = bridge = None
     try:
         try:
             make_estimator(args.estimator, control_period_s=period_s, **params)
         except ConfigurationError as err:
-            args.parser.error(f"--estimator-param: {err}")
+            name, sep, detail = str(err).partition(": ")
+            args.parser.error(f"--set estimator.{name}: {detail}" if sep and " " not in name
+                              else f"--set estimator: {err}")
         robot = DdsRobot(domain_id=args.domain, interface=args.interface, dry_run=args.dry_run)
         say(f"waiting for rt/lowstate on DDS domain {args.domain} (interface "
             f"{args.interface})...")
@@ -174,7 +182,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
                                    trust_timeout_s=stale_after_s, **params)
         say("feet: " + estimator.foot_calibration.describe()
             + ("" if estimator.config.use_foot_force else " (unused: use_foot_force=false)"))
-        loop = ControlLoop(robot, WholeBodyController(solver={"control_period_s": period_s}),
+        loop = ControlLoop(robot, WholeBodyController(config),
                            estimator=estimator)
         bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
         rt = RealtimeLoop(loop, rate_hz=args.control_rate, bridge=bridge,

@@ -28,6 +28,7 @@ from sim.cli.episode_options import goal_episode
 from sim.cli.exit_codes import EXIT_CODES_HELP, EXIT_SUCCEEDED, exit_code
 from sim.cli.options import add_plant_options, add_state_options
 from sim.cli.output import plant_line, state_line
+from sim.cli.settings import add_settings
 from sim.episode_loop import startup_objects_frozen
 from sim.episode_result import UNAVAILABLE, EpisodeListener, EpisodeResult
 from sim.episode_runner import EpisodeRunner
@@ -180,6 +181,8 @@ def add_action_commands(sub: Any) -> None:
     simulation = send.add_argument_group("simulation")
     add_plant_options(simulation)
     add_state_options(simulation)
+    add_settings(send, simulation, ("controller", "estimator", "sensors", "plant", "rates",
+                                    "state"))
     add_dds_options(send.add_argument_group("dds"),
                     flag_help="send the goal over DDS to a running 'go2-wbc run --dds' "
                               "instead of simulating (--timeout is then wall-clock seconds; "
