@@ -622,13 +622,36 @@ def test_start_up_objects_are_frozen_while_the_loop_runs_and_released_after(monk
 
     from sim.control_loop import ControlLoop
 
-    seen = []
+    # gc.get_freeze_count() walks every frozen object (40 s over this run's 800 ticks in this
+    # process), so it is read only just before each gc.freeze()/gc.unfreeze() once the ticks
+    # have begun. Between two such calls the count can only fall (frozen objects freed), so
+    # the count at every tick is at least the one read at the call that ends its stretch, and
+    # the last call must come after the last tick: the least read is at most the least at any
+    # tick, as when it was read at every tick.
+    ticks = [0]
+    seen: list[int] = []  # the count before each freeze or unfreeze once ticks have begun
+    calls_at_tick: list[int] = []
     spin_once = ControlLoop.spin_once
-    monkeypatch.setattr(ControlLoop, "spin_once",
-                        lambda self: (seen.append(gc.get_freeze_count()), spin_once(self))[1])
+
+    def counted_spin_once(self):
+        ticks[0] += 1
+        return spin_once(self)
+
+    def recorded(call):
+        def wrapper():
+            if ticks[0] > 0:
+                seen.append(gc.get_freeze_count())
+                calls_at_tick.append(ticks[0])
+            call()
+        return wrapper
+
+    monkeypatch.setattr(ControlLoop, "spin_once", counted_spin_once)
+    monkeypatch.setattr(gc, "freeze", recorded(gc.freeze))
+    monkeypatch.setattr(gc, "unfreeze", recorded(gc.unfreeze))
     before = gc.get_freeze_count()
     code, _ = run(["stand", "--duration", "0.5"])
     assert code == EXIT_SUCCEEDED
+    assert ticks[0] > 0 and calls_at_tick and calls_at_tick[-1] == ticks[0]
     assert min(seen) > before + 100_000  # the models, MuJoCo, numba's code: out of every scan
     assert gc.get_freeze_count() == before  # given back when the run ends
 
