@@ -29,8 +29,8 @@ The wire, as the robot has it (its topics, QoS, reader and writers: the robot's 
   Slots 0 to 11 are mapped to the plant's motors by joint name; the plant's actuators are in
   the SDK's order, as the messages are. What the drivers apply, before the first command
   and when commands stop, is :class:`sim.command_slot.CommandSlot`'s.
-- ``rt/wbc/sim/truth`` (:class:`wbc.robot_io.dds.sim_truth.SimTruth`): the exact state, one sample per
-  ``LowState_`` with its tick (or the bridge's count), for evaluation only.
+- ``rt/wbc/sim/truth`` (:class:`wbc.robot_io.dds.sim_truth.SimTruth`): the exact state, one
+  sample per ``LowState_`` with its tick (or the bridge's count), for evaluation only.
 - ``config.framing`` other than ``go2``: states framed, and commands applied, as Unitree's
   C++ or Python simulator does (:mod:`sim.state_framing`): test peers of the project's own.
 

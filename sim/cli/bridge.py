@@ -26,10 +26,10 @@ from sim.cli.settings import add_settings
 from sim.command_slot import DAMPING_KD, DEFAULT_COMMAND_TIMEOUT_S, STAND_KD, STAND_KP
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS, Plant
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
-from sim.sim_truth import SIM_TRUTH_TOPIC
 from sim.state_framing import FRAMINGS, GO2, UNITREE_PYTHON, UNITREE_PYTHON_RATE_HZ
 from wbc.core.errors import ConfigurationError, WbcError
 from wbc.robot_io.dds.go2_types import LOW_CMD_TOPIC, LOW_STATE_TOPIC
+from wbc.robot_io.dds.sim_truth import SIM_TRUTH_TOPIC
 
 EXAMPLES_HELP = f"""\
 A controller written for a real GO2 runs against it unchanged: it reads
