@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: install demo test bench bench-full docs lint
+.PHONY: install demo test test-slow bench bench-full docs lint
 
 $(STAMP): pyproject.toml scripts/setup.sh
 	PYTHON=$(PYTHON) bash scripts/setup.sh
@@ -16,8 +16,14 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(BIN)/go2-wbc high-five
 
+# The suite in two stages (both run by CI, .ci/run): `make test` is every area with a quick
+# representative of each; `make test-slow` is the exhaustive sweeps and the multi-minute
+# multi-process and packaging checks (README's Tests section: what each holds, how long).
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -m "not slow"
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m slow
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks.qp_timing --quick

@@ -8,6 +8,10 @@ scenarios after the first share one bridge (and, while it lives, one controller)
 file fast, and run in the order b, c, e, d (d stops its controller with Ctrl-C, for its tick
 log); each starts what it needs if it runs alone.
 
+Scenarios a, b, d and e (15 to 30 s of wall clock each) are in the slow stage (``make
+test-slow``); c, a goal across the three processes whose client is killed, is the quick
+stage's.
+
 Bounds are for a shared 2-core CI machine, looser than the benchmark's targets where timing
 depends on the machine's load (``python -m benchmarks.realtime_loop`` measures those); each
 test prints its figures (``pytest -s``). The bridge's and the controller's loops run
@@ -88,6 +92,7 @@ def _mid_raise(client: ManagedProcess) -> float:
 # -- a. three processes, one high five -------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_high_five_across_three_processes_meets_the_quality_and_timing_bounds(
         tmp_path: Path) -> None:
     """Bridge, controller and client on the wall clock at 500 Hz: the high five SUCCEEDS; the
@@ -205,6 +210,7 @@ def shared(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SharedRun]:
         assert state.bridge.stop() == 0, state.bridge.tail()
 
 
+@pytest.mark.slow
 def test_b_ctrl_c_in_the_client_mid_raise_cancels_and_the_robot_stands(
         shared: SharedRun) -> None:
     """SIGINT to the client during the raise: it cancels the goal, which unwinds (the foot
@@ -256,6 +262,7 @@ def test_c_kill_9_of_the_client_mid_goal_ends_the_goal_and_the_robot_stands(
     assert gone_s < 2.0  # the lease, its check and a status line
 
 
+@pytest.mark.slow
 def test_e_kill_9_of_the_controller_damps_the_bridge_and_a_new_controller_takes_over(
         shared: SharedRun) -> None:
     """SIGKILL to the standing robot's controller: the bridge damps after its command
@@ -293,6 +300,7 @@ def test_e_kill_9_of_the_controller_damps_the_bridge_and_a_new_controller_takes_
     assert damping_s < 1.0  # 0.1 s timeout, then the line's way to the file
 
 
+@pytest.mark.slow
 def test_d_stalled_bridge_damps_the_controller_aborts_the_goal_and_control_resumes(
         shared: SharedRun) -> None:
     """SIGSTOP to the bridge for 0.3 s during the raise: the controller sends its damped

@@ -3,7 +3,10 @@
 domain (:mod:`benchmarks.unitree_peers`): with the default settings the controller says which
 stream it recognised, stands the robot up from lying, and stand, high five (0.40 m, 2 s) and
 sit SUCCEED. One run per peer here (about 40 s each); ``python -m benchmarks.unitree_peers
---runs 5`` repeats them (docs/dds.md has the figures)."""
+--runs 5`` repeats them (docs/dds.md has the figures).
+
+In the slow stage (``make test-slow``): the quick stage covers the two framings without
+processes (tests/test_dds_stream_kinds.py, test_state_framing.py, test_bringup_check.py)."""
 
 from __future__ import annotations
 
@@ -13,6 +16,8 @@ import pytest
 
 from benchmarks.unitree_peers import run_peer
 from sim.state_framing import UNITREE_CPP, UNITREE_PYTHON
+
+pytestmark = pytest.mark.slow
 
 #: What the controller must say first, and the staleness limit it derives [s].
 RECOGNISED = {

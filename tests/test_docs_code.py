@@ -72,7 +72,11 @@ def test_the_readme_has_its_tour_of_commands():
     assert all("  " not in command for command in commands), commands
 
 
-@pytest.mark.parametrize("command", readme_commands())
+# The video line (~18 s: rendering every frame) is in the slow stage (`make test-slow`); the
+# quick stage records a video in tests/test_cli.py.
+@pytest.mark.parametrize("command", [
+    pytest.param(command, marks=pytest.mark.slow) if "--video" in command else command
+    for command in readme_commands()])
 def test_every_readme_command_runs_as_written(command, tmp_path, monkeypatch, capsys):
     """Each ``go2-wbc`` line of the README exits 0 (its goal succeeded), run from a
     scratch folder so that the files it writes land there, with no display (the viewer's

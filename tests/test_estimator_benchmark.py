@@ -1,4 +1,8 @@
-"""benchmarks.estimator --quick: every state source's rows, their bounds, the costs."""
+"""benchmarks.estimator --quick: every state source's rows, their bounds, the costs.
+
+In the slow stage (``make test-slow``, ~40 s): the quick stage bounds every estimator's
+estimate in closed loop (tests/test_realistic_plant.py, test_invariant_ekf.py).
+"""
 
 from __future__ import annotations
 
@@ -8,6 +12,8 @@ import pytest
 
 from benchmarks import estimator
 from wbc.estimation.estimators import ESTIMATORS
+
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")

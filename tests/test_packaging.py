@@ -127,6 +127,9 @@ def test_the_wheel_holds_every_package_module_and_data_file(wheel: Path) -> None
     assert "go2-wbc = sim.cli:main" in entry_points
 
 
+# Slow (`make test-slow`): numba compiles every kernel afresh for the new install (~75 s).
+# The quick stage still installs the wheel there and runs its command and a type check.
+@pytest.mark.slow
 def test_a_fresh_environment_runs_a_high_five_from_the_wheel(environment: Path,
                                                             tmp_path: Path) -> None:
     # numba caches compiled kernels by source path: the new install compiles them afresh

@@ -75,7 +75,14 @@ class FrWatch:
 # ---------------------------------------------------------------------------- pushes
 
 
-@pytest.mark.parametrize("direction_deg", range(0, 360, 45))
+def one_quick(directions_deg, quick_deg: int) -> list:
+    """The push directions [deg] of a sweep: ``quick_deg`` in the quick stage, the others in
+    the slow one (``make test-slow``); a high five each."""
+    return [d if d == quick_deg else pytest.param(d, marks=pytest.mark.slow)
+            for d in directions_deg]
+
+
+@pytest.mark.parametrize("direction_deg", one_quick(range(0, 360, 45), 90))
 def test_small_push_during_the_hold_is_absorbed_without_stepping(direction_deg):
     watch = FrWatch()
     episode = run_high_five(pushes=[hold_push(direction_deg, 3.0)], hooks=[watch], measure=False)
@@ -91,7 +98,8 @@ def test_small_push_during_the_hold_is_absorbed_without_stepping(direction_deg):
     assert_one_result_per_accepted_goal(episode.loop.runner)
 
 
-@pytest.mark.parametrize("direction_deg", DIRECTIONS_DEG)
+# 315: where the foot goes down (the abort branch), as the benchmark's quick sweep shows.
+@pytest.mark.parametrize("direction_deg", one_quick(DIRECTIONS_DEG, 315))
 def test_strong_push_in_any_direction_ends_with_no_fall(direction_deg):
     """8 N s during the hold: absorbed, or the foot goes down at once; never a fall."""
     push = hold_push(direction_deg, 8.0)
@@ -339,6 +347,9 @@ def test_long_sensor_dropout_ends_the_goal_at_once_and_the_loop_stands_the_robot
 # ---------------------------------------------------------------------------- the benchmark
 
 
+# Slow (`make test-slow`): the benchmark's quick sweep (~25 s); its episodes' pushes and
+# plants are the quick stage's tests above, and a sweep runs end to end in test_sweep.
+@pytest.mark.slow
 def test_quick_benchmark_prints_both_tables_and_writes_its_json(tmp_path, capsys):
     path = tmp_path / "robustness.json"
     assert robustness.main(["--quick", "--json", str(path)]) == 0

@@ -97,6 +97,9 @@ def test_the_quick_sweep_runs_its_pushes_plants_and_gains(serial):
     assert table[3:6] == QUICK_TABLE and table[-1] == QUICK_TOTALS
 
 
+# Slow (`make test-slow`): worker processes (Ray's start-up) rerun the quick sweep; the
+# serial run and its resume are the quick stage's.
+@pytest.mark.slow
 def test_the_process_pool_gives_the_serial_results(serial, tmp_path, capsys):
     path = tmp_path / "quick.jsonl"
     assert main(["quick", "--executor", "process", "--jobs", "2", "--results", str(path)]) == 0
@@ -113,6 +116,7 @@ def test_the_process_pool_gives_the_serial_results(serial, tmp_path, capsys):
     assert png.read_bytes()[:4] == b"\x89PNG" and f"Wrote {path} and {png}" in out
 
 
+@pytest.mark.slow
 def test_ray_gives_the_serial_results(serial, tmp_path, capsys, monkeypatch):
     ray = pytest.importorskip("ray", reason="Ray is an optional extra: pip install '.[scale]'")
     monkeypatch.setenv("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")  # a local instance on 127.0.0.1
