@@ -1,4 +1,9 @@
-"""benchmarks.qp_timing --quick: the report's structure, the JSON file and the plot."""
+"""benchmarks.qp_timing --quick: the report's structure, the JSON file and the plot.
+
+The quick run (~35 s: every backend on recorded states and a timed episode) is in the slow
+stage (``make test-slow``); the quick stage checks the backends against DAQP
+(tests/test_whole_body_controller.py) and runs a benchmark end to end (tests/test_sweep.py).
+"""
 
 from __future__ import annotations
 
@@ -23,6 +28,7 @@ def quick_run(tmp_path_factory):
     return json.loads(json_path.read_text()), png_path
 
 
+@pytest.mark.slow
 def test_machine_block(quick_run):
     report, _ = quick_run
     machine = report["machine"]
@@ -34,6 +40,7 @@ def test_machine_block(quick_run):
     assert report["episode"]["warmup_ticks_excluded"] == 200
 
 
+@pytest.mark.slow
 def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
     report, _ = quick_run
     rows = {row["name"]: row for row in report["backends"]}
@@ -65,6 +72,7 @@ def test_every_backend_has_numbers_or_a_skip_reason(quick_run):
     assert rows["daqp, full QP"]["failures"] == 0
 
 
+@pytest.mark.slow
 def test_recorded_states_replay_every_controller_alike(quick_run):
     report, _ = quick_run
     recorded = report["recorded"]
@@ -75,6 +83,7 @@ def test_recorded_states_replay_every_controller_alike(quick_run):
         assert 0 < row["median_us"] <= row["p90_us"] <= row["p99_us"], name
 
 
+@pytest.mark.slow
 def test_scaling_and_episode_tables(quick_run):
     report, _ = quick_run
     scenarios = {(row["controller"], row["scenario"]) for row in report["scaling"]}
@@ -97,6 +106,7 @@ def test_scaling_and_episode_tables(quick_run):
     assert metrics["max_torque_fraction"] < 0.9
 
 
+@pytest.mark.slow
 def test_plot_is_a_png(quick_run):
     _, png_path = quick_run
     assert png_path.read_bytes()[:8] == PNG_SIGNATURE

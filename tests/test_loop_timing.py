@@ -1,4 +1,9 @@
-"""benchmarks.loop_timing --quick: the report's structure; every time positive and finite."""
+"""benchmarks.loop_timing --quick: the report's structure; every time positive and finite.
+
+In the slow stage (``make test-slow``, ~25 s: four instrumented high fives); the quick stage
+runs the tick's stages in tests/test_robot_tick.py and a benchmark end to end in
+tests/test_sweep.py.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +13,8 @@ import math
 import pytest
 
 from benchmarks import loop_timing
+
+pytestmark = pytest.mark.slow
 
 PARTS = ("sensors", "estimator", "actions", "controller", "physics", "physics.mj_step", "rest",
          "tick", "around controller")

@@ -28,6 +28,7 @@ from benchmarks.robustness import (
 from sim.control_loop import ControlLoop
 from sim.sensor_faults import FaultyRobot, SensorFault
 from tests.failing_backends import failing
+from tests.sweeps import quick_first
 from wbc.backends import register_backend
 from wbc.backends.backend import unregister_backend
 from wbc.backends.daqp_backend import DaqpBackend
@@ -75,14 +76,9 @@ class FrWatch:
 # ---------------------------------------------------------------------------- pushes
 
 
-def one_quick(directions_deg, quick_deg: int) -> list:
-    """The push directions [deg] of a sweep: ``quick_deg`` in the quick stage, the others in
-    the slow one (``make test-slow``); a high five each."""
-    return [d if d == quick_deg else pytest.param(d, marks=pytest.mark.slow)
-            for d in directions_deg]
-
-
-@pytest.mark.parametrize("direction_deg", one_quick(range(0, 360, 45), 90))
+# One direction of each sweep in the quick stage (a high five each): 90 deg, and 315 deg where
+# the strong push puts the foot down (the abort branch), as the benchmark's quick sweep shows.
+@pytest.mark.parametrize("direction_deg", quick_first(range(0, 360, 45), lambda d: d == 90))
 def test_small_push_during_the_hold_is_absorbed_without_stepping(direction_deg):
     watch = FrWatch()
     episode = run_high_five(pushes=[hold_push(direction_deg, 3.0)], hooks=[watch], measure=False)
@@ -98,8 +94,7 @@ def test_small_push_during_the_hold_is_absorbed_without_stepping(direction_deg):
     assert_one_result_per_accepted_goal(episode.loop.runner)
 
 
-# 315: where the foot goes down (the abort branch), as the benchmark's quick sweep shows.
-@pytest.mark.parametrize("direction_deg", one_quick(DIRECTIONS_DEG, 315))
+@pytest.mark.parametrize("direction_deg", quick_first(DIRECTIONS_DEG, lambda d: d == 315))
 def test_strong_push_in_any_direction_ends_with_no_fall(direction_deg):
     """8 N s during the hold: absorbed, or the foot goes down at once; never a fall."""
     push = hold_push(direction_deg, 8.0)

@@ -11,6 +11,7 @@ import pytest
 
 from sim.cli import main
 from sim.cli.exit_codes import EXIT_SUCCEEDED
+from tests.sweeps import quick_first
 
 
 def run_cli(tmp_path, capsys, fault: str) -> tuple[int, list[str], dict]:
@@ -20,10 +21,11 @@ def run_cli(tmp_path, capsys, fault: str) -> tuple[int, list[str], dict]:
     return code, lines, json.loads(report.read_text())
 
 
-@pytest.mark.parametrize(("fault", "why"), [
+# The dropout in the quick stage, the joint reading in the slow one (``make test-slow``).
+@pytest.mark.parametrize(("fault", "why"), quick_first([
     ("dropout,0,1", "no sensor sample"),
     ("joint_nan,0,1", "q: non-finite reading at FR_thigh_joint"),
-])
+], lambda case: case[0].startswith("dropout"), unpack=True))
 def test_a_fault_from_the_start_waits_then_the_high_five_succeeds(tmp_path, capsys, fault, why):
     code, lines, report = run_cli(tmp_path, capsys, fault)
     assert code == EXIT_SUCCEEDED
