@@ -6,8 +6,8 @@ Every run is a :class:`sim.episode.Episode` (the default plant, controller and h
 0.40 m, hold 2 s) run by :class:`sim.episode_runner.EpisodeRunner`, measured on the
 simulator's truth, for sensor seeds 0-4:
 
-1. Foot counts on another scale, 30 + 0.25 count/N (``--sensor-param foot_force_offset=30
-   --sensor-param foot_force_gain=0.25``), unknown to the estimator (its default calibration
+1. Foot counts on another scale, 30 + 0.25 count/N (``--set sensors.foot_force_offset=30
+   --set sensors.foot_force_gain=0.25``), unknown to the estimator (its default calibration
    is 10 + 2.5/N): with a 2 s standing calibration (``calibrate_s=2``), the learnt gains'
    and offsets' largest errors and the high five; without it, the estimator's fault and the
    high five.

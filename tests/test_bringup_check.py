@@ -119,6 +119,7 @@ def test_feet_on_another_scale_get_the_gains_that_read_the_weight():
         4 * (0.25 * weight / 4 + 20.0) / 2.5, rel=0.02)
     line = report.settings[0]
     assert line.startswith("foot-force calibration: the default reads the weight -")
+    assert " off: --set estimator.foot_force_gain=" in line  # the command line's form
     gains = [float(g) for g in line.split("foot_force_gain=")[1].split(" ")[0].split(",")]
     # At offset 10 the gains read each foot's static load from its count.
     loads = np.array(report.figures["static_loads_n"])

@@ -372,7 +372,7 @@ def _check_feet(report: BringupReport, counts: np.ndarray, geometry: tuple | Non
     if abs(carried / weight_n - 1.0) > CALIBRATION_TOLERANCE and np.all(gains > 0.0):
         report.settings.append(
             "foot-force calibration: the default reads the weight "
-            f"{carried / weight_n - 1.0:+.0%} off: --estimator-param foot_force_gain="
+            f"{carried / weight_n - 1.0:+.0%} off: --set estimator.foot_force_gain="
             f"{','.join(f'{g:.3g}' for g in gains)} (at the default offsets "
             f"{default.offsets[0]:g}; measure the offsets with the feet unloaded, or run the "
             "standing calibration, for both)")
