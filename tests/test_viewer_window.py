@@ -60,6 +60,9 @@ def test_a_goal_with_the_window_open_exits_cleanly(display):
     assert "headless" not in done.stdout + done.stderr  # the window did open
 
 
+# Slow (`make test-slow`): a second process on the window for 3 s of wall clock at 500 Hz; the
+# quick stage opens the window for a goal (above).
+@pytest.mark.slow
 def test_the_bridge_with_the_window_open_keeps_its_rate_and_exits_cleanly(display, tmp_path):
     report = tmp_path / "bridge.json"
     done = go2_wbc(display, "bridge", "--domain", str(200 + os.getpid() % 30), "--viewer",
