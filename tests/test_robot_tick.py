@@ -182,8 +182,20 @@ class DdsLikeRobot(RecordedRobot):
         return {"states_used": 3}
 
 
+#: A DDS domain of its own (nothing is published: a dry run).
+DDS_DOMAIN = 173
 CAPABILITIES = (StateWaiting, CountsSkips, StalenessLimited, DescribesStream, AnswersTicks,
                 ReportsStats)
+
+
+def test_a_dds_robot_declares_every_capability():
+    from actions.robot.dds_robot import DdsRobot
+
+    robot = DdsRobot(domain_id=DDS_DOMAIN, interface="lo", dry_run=True)
+    try:
+        assert [c.__name__ for c in CAPABILITIES if not isinstance(robot, c)] == []
+    finally:
+        robot.close()
 
 
 def test_a_robot_without_the_optional_capabilities_runs_on_the_loops_defaults():

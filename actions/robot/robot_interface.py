@@ -20,6 +20,8 @@ joint encoders and torques, foot-force counts), never its base position or veloc
 a real GO2 does not measure: the control loop's state estimator turns the records into the
 controller's ``(q, v)``. A simulated robot also knows its true state (:class:`TrueState`),
 which metrics, logs and tests read, and which ``--state truth`` hands the controller.
+What else a robot may offer (wait for its next state, count the states it skipped, ...) it
+declares by the protocols of :mod:`actions.robot.robot_capabilities`.
 """
 
 from __future__ import annotations
