@@ -173,3 +173,32 @@ def test_set_help_lists_every_setting_with_its_default(capsys):
     assert "estimator.trust_timeout_s" in paths and "controller.gains.com_kp" in paths
     assert "controller.solver.control_period_s" not in paths  # --control-rate sets it
     assert all("default" in line for line in lines[1:])
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["bridge", "--set", "sensors.gyro_noise_rad_s=high"],
+     "--set sensors.gyro_noise_rad_s: expected a number, received 'high'"),
+    (["bridge", "--set", "run.control_rate_hz=500"],
+     ("--set: unknown section 'run' in 'run.control_rate_hz=500'; valid sections: plant, "
+      "sensors (--set help lists every setting)")),
+    (["stand-pd", "--set", "sensors.seed=3"],
+     ("--set: unknown section 'sensors' in 'sensors.seed=3'; valid sections: plant, run "
+      "(--set help lists every setting)")),
+])
+def test_each_command_takes_the_settings_it_uses(argv, message, capsys):
+    prog = f"go2-wbc {argv[0]}"
+    assert usage_error(argv, capsys) == f"{prog}: error: {message} (see '{prog} --help')"
+
+
+def test_send_goal_and_stand_pd_read_their_settings():
+    parser = build_parser()
+    args = parser.parse_args(["send-goal", "high_five", "{target_height: 0.3}", "--set",
+                              "controller.shaping.swing_kp=60", "--set", "sensors.seed=4"])
+    check_options(args)
+    assert args.episode.controller_config.shaping.swing_kp == 60.0
+    assert args.episode.sensor_seed == 4
+    args = parser.parse_args(["stand-pd", "--set", "run.control_rate_hz=500", "--set",
+                              "plant.joint_damping=1"])
+    check_options(args)
+    assert args.episode.control_period_s == 0.002
+    assert args.episode.plant_model.hip.damping == 1.0

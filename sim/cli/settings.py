@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from difflib import get_close_matches
 from typing import Any
 
@@ -34,7 +34,7 @@ from sim.plant import Plant
 from sim.scene_overlay import DEFAULT_OVERLAYS
 from sim.sensor_faults import FAULT_KINDS
 from sim.sensor_model import SensorModel
-from wbc.controller.controller_config import PARTS, PATHS, ControllerConfig
+from wbc.controller.controller_config import PATHS, ControllerConfig
 
 #: A push's start [s] (during the hold of a high five) and direction [deg] unless given.
 PUSH_AT_S, PUSH_DIR_DEG = 3.5, 90.0
@@ -387,9 +387,3 @@ def _add_kept_flag(group: Any, setting: Setting) -> None:
                        action="append" if setting.append else "store",
                        default=[] if setting.append else setting.default,
                        help=argparse.SUPPRESS)
-
-
-def controller_parts_help() -> str:
-    """The controller's parts and their fields, for the docs: ``gains: com_kp, ...``."""
-    return "; ".join(f"{name}: {', '.join(f.name for f in fields(part))}"
-                     for name, part in PARTS)
