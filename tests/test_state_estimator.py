@@ -20,6 +20,7 @@ from tests.synthetic_records import (
 from wbc.core.errors import ConfigurationError, UnknownNameError
 from wbc.estimation.estimator_config import EstimatorConfig
 from wbc.estimation.invariant_ekf import InvariantEkf
+from wbc.estimation.kernel_groups import Sample
 from wbc.estimation.shared_kernels import check_sample
 from wbc.estimation.state_estimate import (
     FOOT_SENSOR,
@@ -131,8 +132,9 @@ def test_time_predicted_without_samples_is_not_predicted_again():
     clock = np.array([9.0, 0.009, 0.0, 0.0])  # the last sample: tick 9 at 9 ms
 
     def step(fresh: bool, tick: int) -> float:
-        return check_sample(fresh, float(tick), tick * 1e-3, quat, gyro, accel, joints, joints,
-                            clock, 1e-3, 0.01)[1]
+        sample = Sample(fresh, float(tick), tick * 1e-3, quat, gyro, accel, joints, joints,
+                        np.zeros(4))
+        return check_sample(sample, clock, 1e-3, 0.01)[1]
 
     assert [step(False, 9) for _ in range(4)] == [1e-3] * 4  # four missing: 4 ms predicted
     assert step(True, 10) == pytest.approx(0.0)  # 10 ms: 1 ms after 9, already predicted

@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # the same names, for type checkers and editors
     from wbc.estimation.estimator_config import EstimatorConfig
     from wbc.estimation.estimators import make_estimator
     from wbc.estimation.invariant_ekf import InvariantEkf, InvariantEkfConfig
+    from wbc.estimation.linear_kalman_filter import LinearKalmanFilter
     from wbc.estimation.state_estimate import StateEstimate
     from wbc.estimation.state_estimator import StateEstimator
     from wbc.model.description import (
@@ -87,6 +88,7 @@ _NAMES_BY_MODULE: dict[str, tuple[str, ...]] = {
     "wbc.estimation.estimator_config": ("EstimatorConfig",),
     "wbc.estimation.estimators": ("make_estimator",),
     "wbc.estimation.invariant_ekf": ("InvariantEkf", "InvariantEkfConfig"),
+    "wbc.estimation.linear_kalman_filter": ("LinearKalmanFilter",),
     "wbc.estimation.state_estimate": ("StateEstimate",),
     "wbc.estimation.state_estimator": ("StateEstimator",),
     "wbc.model.description": (

@@ -1,8 +1,9 @@
 """The estimators' numbers: what they share (:class:`SensorTrustConfig`) and the linear filter's.
 
-Each estimator's compiled tick reads its config as one vector: the config class's own
-``_PARAMS``, then :data:`CONTACT_PARAMS` (the shared contact fusion's, read from the end by
-:func:`wbc.estimation.shared_kernels.legs_and_contacts`).
+Each estimator's compiled tick reads its config by field name from one parameter record
+(:meth:`SensorTrustConfig.kernel_params`): the config class's own ``_PARAMS`` and
+:data:`CONTACT_PARAMS` (the shared contact fusion's,
+:func:`wbc.estimation.shared_kernels.contact_weights`).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from typing import ClassVar
 import numpy as np
 
 from wbc.core.errors import ConfigurationError
+from wbc.core.kernel_records import parameter_record
 from wbc.core.validation import as_float, known_fields_only
 from wbc.estimation.foot_force_calibration import FootForceCalibration
 from wbc.model.description import FOOT_RADIUS_M
@@ -63,7 +65,7 @@ class SensorTrustConfig:
 
     #: Valid range of each of the subclass's own numeric fields (low exclusive unless 0).
     _RANGES: ClassVar[dict[str, tuple[float, float]]] = {}
-    #: The numbers the subclass's kernel reads, in its order.
+    #: The numbers the subclass's kernel reads (by name).
     _PARAMS: ClassVar[tuple[str, ...]] = ()
 
     quaternion_tolerance: float = 0.01
@@ -116,14 +118,19 @@ class SensorTrustConfig:
         """Every field's name."""
         return tuple(f.name for f in fields(cls))
 
-    def _vector(self) -> np.ndarray:
-        """The kernel's numbers: the subclass's ``_PARAMS``, then :data:`CONTACT_PARAMS`."""
-        return np.array([getattr(self, name) for name in (*self._PARAMS, *CONTACT_PARAMS)],
-                        dtype=float)
+    def kernel_params(self, control_period_s: float) -> np.ndarray:
+        """The parameter record the compiled kernels read by name: the subclass's
+        ``_PARAMS`` and :data:`CONTACT_PARAMS` as float64 (``use_foot_force`` a bool), and
+        ``control_period_s`` [s] (the step when the samples' stamps do not give it)."""
+        values: dict[str, float | bool] = {
+            name: bool(getattr(self, name)) if name == "use_foot_force"
+            else float(getattr(self, name)) for name in (*self._PARAMS, *CONTACT_PARAMS)}
+        values["control_period_s"] = float(control_period_s)
+        return parameter_record(values)
 
 
-#: The contact fusion's fields, the last of every estimator's kernel vector, in this order
-#: (the calibration per foot is an array of its own: see ``shared_kernels.CAL_SIZE``).
+#: The contact fusion's fields, in every estimator's parameter record (the calibration per
+#: foot is an array of its own: see ``shared_kernels.CAL_SIZE``).
 CONTACT_PARAMS = ("full_trust_force_n", "use_foot_force", "foot_force_on_n",
                   "foot_force_off_n", "foot_force_full_scale", "foot_sensor_stuck_s",
                   "foot_sensor_recover_s", "weight_low_fraction", "weight_high_fraction",

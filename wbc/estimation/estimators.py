@@ -4,8 +4,9 @@ choose from.
 - ``inekf`` (the default): :class:`wbc.InvariantEkf`, a contact-aided invariant EKF that
   estimates the orientation itself from the gyroscope, the accelerometer and the stance
   feet.
-- ``kf``: :class:`wbc.StateEstimator`, the orientation from the IMU's attitude filter and a
-  linear Kalman filter on the legs' kinematics (MIT Cheetah's, legged_control's).
+- ``kf``: :class:`wbc.LinearKalmanFilter` (formerly ``StateEstimator``), the orientation
+  from the IMU's attitude filter and a linear Kalman filter on the legs' kinematics (MIT
+  Cheetah's, legged_control's).
 
 Chosen by measurement (``python -m benchmarks.estimator``, the README's "State estimation"
 section): the invariant EKF's velocity error is a quarter of the linear filter's (0.5
@@ -21,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 from wbc.core.validation import check_name
 
 if TYPE_CHECKING:  # the estimators load compiled code: imported when one is made
-    from wbc.estimation.state_estimator import EstimatorBase
+    from wbc.estimation.estimator_base import EstimatorBase
 
 #: Estimator names, the default first, with what each is.
 ESTIMATORS: dict[str, str] = {
@@ -45,6 +46,6 @@ def make_estimator(name: str = DEFAULT_ESTIMATOR, *, control_period_s: float = 1
         from wbc.estimation.invariant_ekf import InvariantEkf
 
         return InvariantEkf(control_period_s=control_period_s, **overrides)
-    from wbc.estimation.state_estimator import StateEstimator
+    from wbc.estimation.linear_kalman_filter import LinearKalmanFilter
 
-    return StateEstimator(control_period_s=control_period_s, **overrides)
+    return LinearKalmanFilter(control_period_s=control_period_s, **overrides)

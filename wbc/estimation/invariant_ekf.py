@@ -1,7 +1,7 @@
 """A contact-aided invariant EKF for the GO2's floating base: the linear filter's alternative.
 
-:class:`InvariantEkf` has :class:`wbc.estimation.state_estimator.StateEstimator`'s API (``reset``,
-``update``, ``estimate``, ``describe``...) and shares its sample checks, trust accounting,
+:class:`InvariantEkf` has :class:`wbc.LinearKalmanFilter`'s API (``reset``, ``update``,
+``estimate``, ``describe``...) and shares its sample checks, trust accounting,
 contact weights, foot motion, outputs and fault text, so the two can be swapped in the
 control loop and compared by measurement. The filter itself is the right-invariant EKF of
 Hartley et al., "Contact-aided invariant extended Kalman filtering for robot state
@@ -54,6 +54,7 @@ import numpy as np
 
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, as_vector, known_fields_only
+from wbc.estimation.estimator_base import EstimatorBase
 from wbc.estimation.estimator_config import SensorTrustConfig
 from wbc.estimation.invariant_ekf_group import (
     _ABIAS,
@@ -65,8 +66,12 @@ from wbc.estimation.invariant_ekf_group import (
     _VEL,
     _X_SIZE,
 )
-from wbc.estimation.invariant_ekf_kernels import _WORK_SIZE, _estimate, _start
-from wbc.estimation.state_estimator import EstimatorBase
+from wbc.estimation.invariant_ekf_kernels import (
+    WORK_SHAPES,
+    InvariantArrays,
+    _estimate,
+    _start,
+)
 from wbc.model.description import Go2Description
 
 
@@ -151,7 +156,7 @@ class InvariantEkfConfig(SensorTrustConfig):
 
 class InvariantEkf(EstimatorBase):
     """The base's state from a GO2's sensors by a contact-aided invariant EKF (see the
-    module docstring); the API of :class:`wbc.estimation.state_estimator.StateEstimator`.
+    module docstring); the API of :class:`wbc.estimation.linear_kalman_filter.LinearKalmanFilter`.
 
     Args:
         config: Every number (defaults when ``None``); see :class:`InvariantEkfConfig`.
@@ -169,7 +174,7 @@ class InvariantEkf(EstimatorBase):
     config_class = InvariantEkfConfig
     kernel = _estimate
     start_kernel = staticmethod(_start)
-    work_size = _WORK_SIZE
+    work_shapes = WORK_SHAPES
     quaternion_note = "not used after the start (the orientation is the filter's own)"
     config: InvariantEkfConfig
 
@@ -182,8 +187,8 @@ class InvariantEkf(EstimatorBase):
         self._x[_QUAT] = 1.0
         self._P = np.zeros((_DIM, _DIM))
 
-    def _filter_arrays(self) -> tuple[np.ndarray, ...]:
-        return self._x, self._P
+    def _filter_arrays(self) -> InvariantArrays:
+        return InvariantArrays(self._x, self._P)
 
     def _shift_height(self, dz: float) -> None:
         self._x[_POS + 2] += dz  # the IMU's height and the feet's [m]

@@ -30,6 +30,14 @@ _X_SIZE = 34
 _BLOCK_ROWS = np.array([_P, _P, _P, _P, _V, _V, _V, _R, _D, _D + 3, _D + 6, _D + 9])
 _BLOCK_COLS = np.array([_R, _V, _BG, _BA, _R, _BG, _BA, _BG, _BG, _BG, _BG, _BG])
 _BLOCKS = 12
+#: The corrections' work arrays, by name and shape (fields of the tick's work record): the
+#: innovation covariance's inverse, the gain's transpose, the error step, and the group
+#: update's rotation step, its product, its matrix and a vector.
+CORRECTION_WORK: dict[str, tuple[int, ...]] = {
+    "correction_inverse": (3, 3), "correction_gain": (3, _DIM), "correction_delta": (_DIM,),
+    "correction_step": (4,), "correction_product": (4,), "correction_rotation": (3, 3),
+    "correction_vector": (3,),
+}
 
 
 @numba.njit(cache=True)
@@ -103,11 +111,13 @@ def _propagate_covariance(P, blocks):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _add_process_noise(P, x, params, weight, min_weight, dt):  # pragma: no cover - compiled
+def _add_process_noise(P, x, params, weight, dt):  # pragma: no cover - compiled
     """``P += Ad_X Q Ad_X^T dt``: the IMU's and the feet's noise in the right-invariant
-    error (the gyroscope's noise reaches every translation ``x`` as ``x^``)."""
-    gyro2 = params[0] * params[0] * dt
-    accel2 = params[1] * params[1] * dt
+    error (the gyroscope's noise reaches every translation ``x`` as ``x^``); ``params``:
+    the parameter record (its noise densities and ``min_contact_weight``, by name)."""
+    gyro2 = params.gyroscope_noise * params.gyroscope_noise * dt
+    accel2 = params.accelerometer_noise * params.accelerometer_noise * dt
+    min_weight = params.min_contact_weight
     # Blocks 0 (rotation), 1 (v), 2 (p), 3..6 (feet): the gyroscope's term W_a W_b^T with
     # W_R = I and W_x = x^.
     for a in range(7):
@@ -141,9 +151,9 @@ def _add_process_noise(P, x, params, weight, min_weight, dt):  # pragma: no cove
                     for c in range(3):
                         P[ea + r, eb + c] += gyro2 * ((dot if r == c else 0.0)
                                                       - x[sb + r] * x[sa + c])
-    contact2 = params[4] * params[4] * dt
-    gbias2 = params[2] * params[2] * dt
-    abias2 = params[3] * params[3] * dt
+    contact2 = params.contact_noise * params.contact_noise * dt
+    gbias2 = params.gyro_bias_noise * params.gyro_bias_noise * dt
+    abias2 = params.accel_bias_noise * params.accel_bias_noise * dt
     for k in range(3):
         P[_V + k, _V + k] += accel2
         P[_BG + k, _BG + k] += gbias2
@@ -157,11 +167,11 @@ def _add_process_noise(P, x, params, weight, min_weight, dt):  # pragma: no cove
 def _apply_correction(x, delta, work):  # pragma: no cover - compiled
     """``X <- Exp(delta) X`` on SE_{2+4}(3) (right-invariant update), biases ``+= delta``.
 
-    ``work`` (21,): scratch for the rotation step, its matrix and the left Jacobian.
+    ``work``: the work record (its ``correction_step``, ``_product``, ``_rotation`` and
+    ``_vector`` are scratch).
     """
-    step, product = work[0:4], work[4:8]
-    dR = work[8:17].reshape((3, 3))
-    vec = work[17:20]
+    step, product = work.correction_step, work.correction_product
+    dR, vec = work.correction_rotation, work.correction_vector
     phi0, phi1, phi2 = delta[0], delta[1], delta[2]
     quat_exp(phi0, phi1, phi2, step)
     quat_rotation(step, dR)
@@ -201,10 +211,10 @@ def _correct(x, P, HP, S, innovation, work):  # pragma: no cover - compiled
     """A 3-D Kalman correction given ``HP = H P`` (3, 27), the innovation covariance ``S =
     H P H^T + noise`` (3, 3) and the innovation (3,); applies it to the mean
     (:func:`_apply_correction`) and ``P <- P - K H P``. Row-major throughout: every inner
-    loop runs along a row of 27."""
-    inverse = work[0:9].reshape((3, 3))
-    gain = work[9:90].reshape((3, 27))  # K^T = S^-1 H P
-    delta = work[90:117]
+    loop runs along a row of 27. ``work``: the work record (:data:`CORRECTION_WORK`)."""
+    inverse = work.correction_inverse
+    gain = work.correction_gain  # K^T = S^-1 H P
+    delta = work.correction_delta
     # The inverse of the symmetric 3 x 3 innovation covariance, by cofactors.
     c00 = S[1, 1] * S[2, 2] - S[1, 2] * S[2, 1]
     c01 = S[0, 2] * S[2, 1] - S[0, 1] * S[2, 2]
@@ -233,13 +243,14 @@ def _correct(x, P, HP, S, innovation, work):  # pragma: no cover - compiled
         row = P[r]
         for c in range(_DIM):
             row[c] -= k0 * HP[0, c] + k1 * HP[1, c] + k2 * HP[2, c]
-    _apply_correction(x, delta, work[117:138])
+    _apply_correction(x, delta, work)
 
 
 @numba.njit(cache=True)
 def _correct_scalar(x, P, hP, variance, innovation, work):  # pragma: no cover - compiled
-    """A scalar Kalman correction given ``hP = h^T P`` (27,) and ``h^T P h + noise``."""
-    delta = work[0:27]
+    """A scalar Kalman correction given ``hP = h^T P`` (27,) and ``h^T P h + noise``;
+    ``work``: the work record (:data:`CORRECTION_WORK`)."""
+    delta = work.correction_delta
     if not variance > 0.0:
         return
     for r in range(_DIM):
@@ -249,4 +260,4 @@ def _correct_scalar(x, P, hP, variance, innovation, work):  # pragma: no cover -
         row = P[r]
         for c in range(_DIM):
             row[c] -= k * hP[c]
-    _apply_correction(x, delta, work[27:48])
+    _apply_correction(x, delta, work)

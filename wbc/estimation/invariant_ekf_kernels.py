@@ -7,7 +7,10 @@ sample's checks, contacts, foot motion and outputs are :mod:`wbc.estimation.shar
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
+import numpy as np
 
 from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, quat_rotation
@@ -16,6 +19,7 @@ from wbc.estimation.invariant_ekf_group import (
     _ACCEL,
     _BA,
     _BG,
+    _BLOCKS,
     _D,
     _DIM,
     _FEET,
@@ -27,6 +31,7 @@ from wbc.estimation.invariant_ekf_group import (
     _R,
     _V,
     _VEL,
+    CORRECTION_WORK,
     _add_process_noise,
     _correct,
     _correct_scalar,
@@ -34,8 +39,8 @@ from wbc.estimation.invariant_ekf_group import (
     _skew_times,
     _transition_blocks,
 )
+from wbc.estimation.kernel_groups import SHARED_WORK
 from wbc.estimation.shared_kernels import (
-    START_WORK_SIZE,
     account_trust,
     check_sample,
     foot_motion,
@@ -44,42 +49,53 @@ from wbc.estimation.shared_kernels import (
     write_outputs,
 )
 
-#: Scratch space of the tick's kernel (see :func:`_estimate`) and of the start [floats].
-_WORK_SIZE = 497
+#: The tick's and the start's work arrays, by name and shape (a work record:
+#: :func:`wbc.core.kernel_records.work_record`): the shared kernels' (:data:`SHARED_WORK`),
+#: the corrections' (:data:`CORRECTION_WORK`), then the orientation's matrix, the inputs
+#: (angular velocity, specific force, their cross product), the transition's blocks, the
+#: quaternion step, a foot's measurement (``H P``, ``S``, innovation, body-frame position,
+#: kinematic Jacobian in the world, the height's row) and the start's ``p^``.
+WORK_SHAPES: dict[str, tuple[int, ...]] = {
+    **SHARED_WORK, **CORRECTION_WORK, "rotation": (3, 3), "omega": (3,), "accel": (3,),
+    "turned": (3,), "blocks": (_BLOCKS, 3, 3), "step": (4,), "product": (4,),
+    "HP": (3, _DIM), "S": (3, 3), "innovation": (3,), "body": (3,), "kin": (3, 3),
+    "height_row": (_DIM,), "align": (4,), "hat": (3, 3),
+}
+
+
+class InvariantArrays(NamedTuple):
+    """The filter's own arrays (in/out): the mean ``x`` (:data:`_X_SIZE`) and the
+    right-invariant error's covariance ``P`` (27, 27)."""
+
+    x: np.ndarray
+    P: np.ndarray
 
 
 @numba.njit(cache=True)
-def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, force_in,
-              schedule, dt_nominal, params, imu_offset, rotations, translations, axes,
-              foot_offsets, foot_position, foot_jacobian, foot_angular_jacobian, clock, x, P,
-              foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
-              joint_q, joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
+def _estimate(sample, schedule, params, legs, filter_state, sensors, outputs,
+              work):  # pragma: no cover - compiled
     """One tick of the invariant EKF (see the module docstring); returns the fault flags.
 
-    ``x`` (:data:`_X_SIZE`) is the mean, ``P`` (27, 27) the right-invariant error's
-    covariance; ``work`` (:data:`_WORK_SIZE`) is scratch space: the tick allocates nothing.
+    The groups are :func:`wbc.estimation.state_estimator_kernels._estimate`'s, with the
+    parameter record holding ``InvariantEkfConfig``'s fields, ``filter_state`` the
+    :class:`InvariantArrays` and ``work`` a record of :data:`WORK_SHAPES`: the tick
+    allocates nothing.
     """
-    (sigma_k, sigma_pos, sigma_vel, sigma_h, swing_scale, min_weight, radius, quat_tol) = (
-        params[5], params[6], params[7], params[8], params[9], params[10], params[11],
-        params[12])
+    p, w = params[0], work[0]
+    x, P = filter_state.x, filter_state.P
+    sigma_k, sigma_pos = p.kinematics_noise_rad, p.foot_position_noise_m
+    sigma_vel, sigma_h = p.foot_velocity_noise_m_s, p.foot_height_noise_m
+    swing_scale, min_weight, radius = p.swing_noise_scale, p.min_contact_weight, p.foot_radius_m
+    weight, imu_offset = outputs.contact, legs.imu_offset
+    foot_position, foot_jacobian = legs.foot_position, legs.foot_jacobian
+    gyro_in, accel_in = sample.gyroscope, sample.accelerometer
     flags, dt, new, _quaternion_ok, gyro_ok, accel_ok, joints_ok = check_sample(
-        fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock, dt_nominal,
-        quat_tol)
-    rotation = work[0:9].reshape((3, 3))
-    omega, accel, turned = work[9:12], work[12:15], work[15:18]
-    relative = work[18:30].reshape((4, 3))
-    velocity = work[30:42].reshape((4, 3))
-    rolling = work[42:54].reshape((4, 3))
-    legs_work = work[54:90].reshape((4, 3, 3))
-    motion_work = work[90:102].reshape((4, 3))
-    output_work = work[102:111].reshape((3, 3))
-    blocks = work[111:219].reshape((12, 3, 3))
-    step, product = work[219:223], work[223:227]
-    HP = work[227:308].reshape((3, 27))
-    S = work[308:317].reshape((3, 3))
-    innovation, body, kin = work[317:320], work[320:323], work[323:332].reshape((3, 3))
-    height_row = work[332:359]
-    correction_work = work[359:497]
+        sample, sensors.clock, p.control_period_s, p.quaternion_tolerance)
+    rotation, omega, accel, turned = w.rotation, w.omega, w.accel, w.turned
+    relative, velocity, rolling = w.relative, w.velocity, w.rolling
+    blocks, step, product = w.blocks, w.step, w.product
+    HP, S, innovation, body, kin = w.HP, w.S, w.innovation, w.body, w.kin
+    height_row = w.height_row
     quat = x[_QUAT:_QUAT + 4]
     gbias, abias = x[_GBIAS:_GBIAS + 3], x[_ABIAS:_ABIAS + 3]
     # --- inputs: the last good readings stand in for bad or missing ones
@@ -95,15 +111,12 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     else:  # no acceleration: the specific force is gravity's
         for k in range(3):
             accel[k] = GRAVITY_M_S2 * rotation[2, k]
-    flags |= legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params,
-                               rotations, translations, axes, foot_offsets, foot_position,
-                               foot_jacobian, foot_angular_jacobian, legs_work, joint_q,
-                               joint_dq, foot_contact, foot_same_s, foot_good_s, foot_reason,
-                               foot_last, foot_cal, weight)
+    flags |= legs_and_contacts(joints_ok, new, dt, sample, schedule, p, legs, sensors, outputs,
+                               w.legs)
     # --- prediction: the covariance on the unpropagated mean, then the mean
     _transition_blocks(rotation, x, dt, blocks)
     _propagate_covariance(P, blocks)
-    _add_process_noise(P, x, params, weight, min_weight, dt)
+    _add_process_noise(P, x, p, weight, dt)
     phi0, phi1, phi2 = omega[0] * dt, omega[1] * dt, omega[2] * dt
     # The specific force over the step in the starting frame, to first order in the turn:
     # Gamma_1 a = a + phi x a / 2 for the velocity, Gamma_2 a = a / 2 + phi x a / 6.
@@ -125,8 +138,8 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     quat_normalize(product)
     quat[:] = product
     quat_rotation(quat, rotation)
-    foot_motion(rotation, omega, joint_dq, imu_offset, foot_position, foot_jacobian,
-                foot_angular_jacobian, radius, relative, velocity, rolling, motion_work)
+    foot_motion(rotation, omega, outputs.joint_dq, imu_offset, legs, radius, relative,
+                velocity, rolling, w)
     for i in range(4):
         f = _FEET + 3 * i
         e = _D + 3 * i
@@ -176,7 +189,7 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                                                               + kin[r, 1] * kin[c, 1]
                                                               + kin[r, 2] * kin[c, 2]))
                 S[r, r] += scale * sigma_pos * sigma_pos
-            _correct(x, P, HP, S, innovation, correction_work)
+            _correct(x, P, HP, S, innovation, w)
             quat_rotation(quat, rotation)
             if sigma_vel > 0.0:
                 # The IMU velocity the rolling foot implies (world): H = I on v.
@@ -188,7 +201,7 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                     for c in range(3):
                         S[r, c] = HP[r, _V + c]
                     S[r, r] += scale * sigma_vel * sigma_vel
-                _correct(x, P, HP, S, innovation, correction_work)
+                _correct(x, P, HP, S, innovation, w)
                 quat_rotation(quat, rotation)
             if sigma_h > 0.0:
                 # The foot centre's height r on a flat floor: d_z - r = 0. Not invariant:
@@ -198,8 +211,7 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
                     height_row[c] = dy * P[_R, c] - dx * P[_R + 1, c] + P[e + 2, c]
                 variance = (dy * height_row[_R] - dx * height_row[_R + 1] + height_row[e + 2]
                             + scale * sigma_h * sigma_h)
-                _correct_scalar(x, P, height_row, variance, radius - x[f + 2],
-                                correction_work)
+                _correct_scalar(x, P, height_row, variance, radius - x[f + 2], w)
                 quat_rotation(quat, rotation)
     # Keep the covariance symmetric against rounding.
     for r in range(_DIM):
@@ -210,25 +222,23 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     for k in range(3):
         omega[k] = x[_GYRO + k] - gbias[k]
     write_outputs(rotation, quat, omega, x[_POS], x[_POS + 1], x[_POS + 2], x[_VEL],
-                  x[_VEL + 1], x[_VEL + 2], imu_offset, joint_q, joint_dq, q_out, v_out,
-                  output_work)
-    account_trust(flags, dt, clock)
+                  x[_VEL + 1], x[_VEL + 2], imu_offset, outputs, w)
+    account_trust(flags, dt, sensors.clock)
     return flags
 
 
 @numba.njit(cache=True)
-def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foot_offsets,
-           foot_position, foot_jacobian, foot_angular_jacobian, x, P, base_x, base_y,
-           keep_yaw, work):  # pragma: no cover - compiled
+def _start(quat_in, q_in, params, legs, filter_state, base_x, base_y, keep_yaw,
+           work):  # pragma: no cover - compiled
     """Start on four loaded feet, at rest, where :func:`start_pose` puts the base and the
-    feet, biases 0, and the priors' covariance; ``work`` is scratch space (:data:`_WORK_SIZE`)."""
-    sigma_pos, radius = params[6], params[11]
-    tilt, gyro_bias, accel_bias = params[13], params[14], params[15]
+    feet, biases 0, and the priors' covariance; the groups are :func:`_estimate`'s."""
+    p, w = params[0], work[0]
+    x, P = filter_state.x, filter_state.P
+    sigma_pos, tilt = p.foot_position_noise_m, p.initial_tilt_rad
+    gyro_bias, accel_bias = p.initial_gyro_bias_rad_s, p.initial_accel_bias_m_s2
     x[:] = 0.0
-    start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, imu_offset, rotations,
-               translations, axes, foot_offsets, foot_position, foot_jacobian,
-               foot_angular_jacobian, work[0:4], x[_QUAT:_QUAT + 4], x[_POS:_POS + 3],
-               x[_FEET:_FEET + 12].reshape((4, 3)), work[4:4 + START_WORK_SIZE])
+    start_pose(quat_in, q_in, keep_yaw, base_x, base_y, p.foot_radius_m, legs, w.align,
+               x[_QUAT:_QUAT + 4], x[_POS:_POS + 3], x[_FEET:_FEET + 12].reshape((4, 3)), w)
     x[_ACCEL + 2] = GRAVITY_M_S2
     P[:, :] = 0.0
     # Roll and pitch as good as the IMU's attitude filter; the yaw is 0 by definition.
@@ -242,7 +252,7 @@ def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foo
     # The position is known in the world, the orientation is not: the right-invariant error
     # measures the position about the world's origin, xi_p = dp + p^ xi_R. (Left out, a
     # later roll or pitch correction would swing the base about the origin.)
-    hat = work[0:9].reshape((3, 3))  # p^
+    hat = w.hat  # p^
     px, py, pz = x[_POS], x[_POS + 1], x[_POS + 2]
     hat[0, 0], hat[0, 1], hat[0, 2] = 0.0, -pz, py
     hat[1, 0], hat[1, 1], hat[1, 2] = pz, 0.0, -px

@@ -13,6 +13,12 @@ import math
 import numba
 
 from wbc.core.quaternion_kernels import quat_multiply, quat_normalize, quat_rotation, quat_yaw
+from wbc.estimation.kernel_groups import (
+    CLOCK_PREDICTED_S,
+    CLOCK_STAMP_S,
+    CLOCK_TICK,
+    CLOCK_UNTRUSTED_S,
+)
 from wbc.estimation.state_estimate import (
     ACCEL_BAD,
     FOOT_NON_FINITE,
@@ -32,8 +38,6 @@ from wbc.estimation.state_estimate import (
 )
 from wbc.model.leg_kinematics import leg_kinematics
 
-#: Scratch space of :func:`start_pose` [floats].
-START_WORK_SIZE = 49
 #: The foot sensors' calibration and weight check, one array (``foot_cal``): each foot's
 #: offset [counts] and gain [counts/N] (``LEGS`` order), the robot's weight [N], the time the
 #: evidence has contradicted it [s], the time it has agreed since [s], the fault (1: raised)
@@ -42,17 +46,14 @@ CAL_OFFSET, CAL_GAIN, CAL_WEIGHT = 0, 4, 8
 CAL_BAD_S, CAL_GOOD_S, CAL_ACTIVE, CAL_SUM = 9, 10, 11, 12
 CAL_SIZE = 13
 
+
 @numba.njit(cache=True)
-def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock,
-                 dt_nominal, quat_tol):  # pragma: no cover - compiled
+def check_sample(sample, clock, dt_nominal, quat_tol):  # pragma: no cover - compiled
     """Which parts of this tick's sample can be used; the time step.
 
     Args:
-        fresh: A sample arrived (``False``: none this period).
-        tick, stamp_s: Its counter and stamp [s].
-        quat_in, gyro_in, accel_in, q_in, dq_in: Its IMU and joint readings.
-        clock: In/out: ``(last tick, last stamp [s], untrusted time [s], time predicted
-            since the last sample [s])``.
+        sample: This tick's :class:`~wbc.estimation.kernel_groups.Sample`.
+        clock: In/out: :attr:`SensorState.clock` (the ``CLOCK_*`` entries).
         dt_nominal: The control period [s], used when the stamps do not give the step.
         quat_tol: Largest ``| |quat| - 1 |`` of a usable quaternion.
 
@@ -62,22 +63,24 @@ def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, 
     """
     flags = 0
     dt = dt_nominal
-    new = fresh
-    if not fresh:
+    new = sample.fresh
+    if not sample.fresh:
         flags |= NO_DATA
-    elif tick == clock[0]:
+    elif sample.tick == clock[CLOCK_TICK]:
         flags |= STALE
         new = False
     if new:
         # The step from the last sample, less what was predicted since without one.
-        elapsed = stamp_s - clock[1]
+        elapsed = sample.stamp_s - clock[CLOCK_STAMP_S]
         if 0.0 < elapsed < 0.1:
-            dt = max(0.0, elapsed - clock[3])
-        clock[0] = tick
-        clock[1] = stamp_s
-        clock[3] = 0.0
+            dt = max(0.0, elapsed - clock[CLOCK_PREDICTED_S])
+        clock[CLOCK_TICK] = sample.tick
+        clock[CLOCK_STAMP_S] = sample.stamp_s
+        clock[CLOCK_PREDICTED_S] = 0.0
     else:
-        clock[3] += dt
+        clock[CLOCK_PREDICTED_S] += dt
+    q_in, dq_in = sample.q, sample.dq
+    gyro_in, accel_in, quat_in = sample.gyroscope, sample.accelerometer, sample.quaternion
     joints_ok = new
     if new:
         for j in range(12):
@@ -107,41 +110,56 @@ def check_sample(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, 
 
 @numba.njit(cache=True)
 def account_trust(flags, dt, clock):  # pragma: no cover - compiled
-    """Add ``dt`` [s] to the untrusted time ``clock[2]`` if the tick's flags make it
+    """Add ``dt`` [s] to the untrusted time of ``clock`` if the tick's flags make it
     untrustworthy, else reset it."""
     if flags & UNTRUSTED:
-        clock[2] += dt
+        clock[CLOCK_UNTRUSTED_S] += dt
     else:
-        clock[2] = 0.0
+        clock[CLOCK_UNTRUSTED_S] = 0.0
 
 
 @numba.njit(cache=True)
-def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on, force_off,
-                    force_full, stuck_s, recover_s, weight_low, weight_high, weight_check_s,
-                    foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
+def contact_weights(new, dt, force_in, schedule, params, sensors,
                     weight):  # pragma: no cover - compiled
     """Each foot's contact weight: the schedule, fused with its foot-force sensor.
 
-    The schedule's weight is the foot's normal-force bound over ``full_force`` (clipped to
-    [0, 1]); the sensor's verdict is a hysteresis between ``force_off`` and ``force_on``
-    [N], its count turned into newtons by the calibration in ``foot_cal``. A sensor at full
-    scale (counts), non-finite, or (on a scheduled stance foot) repeating one reading for
-    ``stuck_s`` [s] is distrusted until it has read changing, in-range values for
-    ``recover_s`` [s]; the schedule alone then decides for that foot. Without foot sensors
-    (``use_force`` 0) their readings are not judged: the schedule decides every foot.
+    The schedule's weight is the foot's normal-force bound over ``full_trust_force_n``
+    (clipped to [0, 1]); the sensor's verdict is a hysteresis between ``foot_force_off_n``
+    and ``foot_force_on_n`` [N], its count turned into newtons by the calibration in
+    ``foot_cal``. A sensor at full scale (``foot_force_full_scale`` counts), non-finite, or
+    (on a scheduled stance foot) repeating one reading for ``foot_sensor_stuck_s`` [s] is
+    distrusted until it has read changing, in-range values for ``foot_sensor_recover_s``
+    [s]; the schedule alone then decides for that foot. Without foot sensors
+    (``use_foot_force`` false) their readings are not judged: the schedule decides every
+    foot.
 
     The weight check: while at least three feet are scheduled to stand and every sensor is
-    trusted, the calibrated forces must sum to between ``weight_low`` and ``weight_high``
-    times the robot's weight; evidence outside for ``weight_check_s`` [s] raises
-    :data:`FOOT_WEIGHT`, and the schedule alone decides every foot until the sum has been
-    back inside for ``recover_s``.
+    trusted, the calibrated forces must sum to between ``weight_low_fraction`` and
+    ``weight_high_fraction`` times the robot's weight; evidence outside for
+    ``weight_check_s`` [s] raises :data:`FOOT_WEIGHT`, and the schedule alone decides every
+    foot until the sum has been back inside for ``foot_sensor_recover_s``.
+
+    Args:
+        new, dt: A new sample came; the time step [s].
+        force_in: The sample's foot-force counts (4,).
+        schedule: Each foot's normal-force bound [N] (4,).
+        params: The estimator's parameter record (the fields above, by name).
+        sensors: In/out: :class:`~wbc.estimation.kernel_groups.SensorState` (``foot_cal``
+            laid out as :data:`CAL_SIZE` says).
+        weight: Out (4,): each foot's contact weight.
 
     Returns:
         :data:`FOOT_SENSOR` if a foot sensor is distrusted, else 0, with each foot's reason
-        in two bits from :data:`FOOT_REASON_SHIFT`, and :data:`FOOT_WEIGHT`. ``foot_*`` are
-        the sensors' state (in/out; ``foot_cal`` is laid out as :data:`CAL_SIZE` says),
-        ``weight`` (4,) the output.
+        in two bits from :data:`FOOT_REASON_SHIFT`, and :data:`FOOT_WEIGHT`.
     """
+    full_force, use_force = params.full_trust_force_n, params.use_foot_force
+    force_on, force_off = params.foot_force_on_n, params.foot_force_off_n
+    force_full, stuck_s = params.foot_force_full_scale, params.foot_sensor_stuck_s
+    recover_s, weight_check_s = params.foot_sensor_recover_s, params.weight_check_s
+    weight_low, weight_high = params.weight_low_fraction, params.weight_high_fraction
+    foot_contact, foot_same_s, foot_good_s = (sensors.foot_contact, sensors.foot_same_s,
+                                              sensors.foot_good_s)
+    foot_reason, foot_last, foot_cal = sensors.foot_reason, sensors.foot_last, sensors.foot_cal
     flags = 0
     total = 0.0
     standing = 0
@@ -209,34 +227,30 @@ def contact_weights(new, dt, force_in, schedule, full_force, use_force, force_on
 
 
 @numba.njit(cache=True)
-def legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params, rotations,
-                      translations, axes, foot_offsets, foot_position, foot_jacobian,
-                      foot_angular_jacobian, legs_work, joint_q, joint_dq, foot_contact,
-                      foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
-                      weight):  # pragma: no cover - compiled
-    """The joints (kept when usable), the legs' kinematics and each foot's contact weight
-    (:func:`contact_weights`); the contact flags.
+def legs_and_contacts(joints_ok, new, dt, sample, schedule, params, legs, sensors, outputs,
+                      legs_work):  # pragma: no cover - compiled
+    """The joints (kept in ``outputs`` when usable), the legs' kinematics (``legs``,
+    scratch ``legs_work`` (4, 3, 3)) and each foot's contact weight
+    (:func:`contact_weights`, into ``outputs.contact``); the contact flags.
 
-    ``params`` is the estimator's config vector; the contact fields are read from its end
-    (:data:`CONTACT_PARAMS`, every estimator's config ends with them in that order).
+    ``params`` is the estimator's parameter record: every estimator's has the contact
+    fusion's fields (:data:`wbc.estimation.estimator_config.CONTACT_PARAMS`).
     """
+    joint_q, joint_dq = outputs.joint_q, outputs.joint_dq
     if joints_ok:
         for j in range(12):
-            joint_q[j] = q_in[j]
-            joint_dq[j] = dq_in[j]
-        leg_kinematics(joint_q, rotations, translations, axes, foot_offsets, foot_position,
-                       foot_jacobian, foot_angular_jacobian, legs_work)
-    end = params.shape[0]
-    return contact_weights(new, dt, force_in, schedule, params[end - 10], params[end - 9] > 0.5,
-                           params[end - 8], params[end - 7], params[end - 6], params[end - 5],
-                           params[end - 4], params[end - 3], params[end - 2], params[end - 1],
-                           foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last,
-                           foot_cal, weight)
+            joint_q[j] = sample.q[j]
+            joint_dq[j] = sample.dq[j]
+        # (``legs_work[:]``: a plain array view, as leg_kinematics' signature takes.)
+        leg_kinematics(joint_q, legs.rotations, legs.translations, legs.axes,
+                       legs.foot_offsets, legs.foot_position, legs.foot_jacobian,
+                       legs.foot_angular_jacobian, legs_work[:])
+    return contact_weights(new, dt, sample.foot_force, schedule, params, sensors,
+                           outputs.contact)
 
 
 @numba.njit(cache=True)
-def foot_motion(rotation, omega, joint_dq, origin, foot_position, foot_jacobian,
-                foot_angular_jacobian, radius, relative, velocity, rolling,
+def foot_motion(rotation, omega, joint_dq, origin, legs, radius, relative, velocity, rolling,
                 work):  # pragma: no cover - compiled
     """Each foot's kinematics in the world's orientation, relative to a point of the base.
 
@@ -245,16 +259,19 @@ def foot_motion(rotation, omega, joint_dq, origin, foot_position, foot_jacobian,
         omega: The base's angular velocity, base frame [rad/s].
         joint_dq: Joint velocities [rad/s] (12,), description order.
         origin: The point of the base [m] (the IMU), base frame.
-        foot_position, foot_jacobian, foot_angular_jacobian: :class:`LegKinematics`' outputs.
+        legs: :class:`~wbc.estimation.kernel_groups.Legs` (its outputs are read).
         radius: The foot spheres' radius [m].
         relative: Out (4, 3): each foot centre minus the point, world orientation [m].
         velocity: Out (4, 3): the point's world velocity [m/s] if the foot's sphere rolls
             on the floor without slipping.
         rolling: Out (4, 3): the foot centre's world velocity as its sphere rolls
             (``omega_foot x (0, 0, radius)``) [m/s].
-        work: Scratch space (4, 3).
+        work: The work record (its ``foot_*`` arrays are scratch).
     """
-    body, spin, rel_v, world_spin = work[0], work[1], work[2], work[3]
+    body, spin = work.foot_body, work.foot_spin
+    rel_v, world_spin = work.foot_relative_velocity, work.foot_world_spin
+    foot_position, foot_jacobian = legs.foot_position, legs.foot_jacobian
+    foot_angular_jacobian = legs.foot_angular_jacobian
     for i in range(4):
         for r in range(3):
             body[r] = foot_position[i, r] - origin[r]
@@ -283,12 +300,14 @@ def foot_motion(rotation, omega, joint_dq, origin, foot_position, foot_jacobian,
 
 
 @numba.njit(cache=True)
-def write_outputs(rotation, quat, omega, px, py, pz, vx, vy, vz, imu_offset, joint_q, joint_dq,
-                  q_out, v_out, work):  # pragma: no cover - compiled
-    """The controller's ``(q, v)`` from the IMU site's world position ``(px, py, pz)`` and
-    velocity ``(vx, vy, vz)``, the orientation (``rotation`` and ``quat`` as w, x, y, z), the
-    body angular velocity and the joints (Pinocchio's conventions); ``work``: scratch (3, 3)."""
-    offset, spin, base = work[0], work[1], work[2]
+def write_outputs(rotation, quat, omega, px, py, pz, vx, vy, vz, imu_offset, outputs,
+                  work):  # pragma: no cover - compiled
+    """The controller's ``(q, v)`` (into ``outputs``) from the IMU site's world position
+    ``(px, py, pz)`` and velocity ``(vx, vy, vz)``, the orientation (``rotation`` and
+    ``quat`` as w, x, y, z), the body angular velocity and ``outputs``' joints (Pinocchio's
+    conventions); ``work``: the work record (its ``output_*`` arrays are scratch)."""
+    offset, spin, base = work.output_offset, work.output_spin, work.output_base
+    joint_q, joint_dq, q_out, v_out = outputs.joint_q, outputs.joint_dq, outputs.q, outputs.v
     for r in range(3):
         offset[r] = (rotation[r, 0] * imu_offset[0] + rotation[r, 1] * imu_offset[1]
                      + rotation[r, 2] * imu_offset[2])
@@ -311,10 +330,8 @@ def write_outputs(rotation, quat, omega, px, py, pz, vx, vy, vz, imu_offset, joi
 
 
 @numba.njit(cache=True)
-def start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, imu_offset, rotations,
-               translations, axes, foot_offsets, foot_position, foot_jacobian,
-               foot_angular_jacobian, align, quat, imu_position, feet,
-               work):  # pragma: no cover - compiled
+def start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, legs, align, quat,
+               imu_position, feet, work):  # pragma: no cover - compiled
     """Where an estimator starts: on four loaded feet, the base at ``(base_x, base_y)`` [m].
 
     The orientation is the IMU's quaternion ``quat_in`` (w, x, y, z; normalised here) turned
@@ -323,17 +340,17 @@ def start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, imu_offset, rota
 
     Args:
         quat_in, q_in: The first sample's quaternion and joint angles [rad] (12,).
-        imu_offset, rotations, ..., foot_angular_jacobian: :class:`LegKinematics`' arrays
-            (its outputs are filled for ``q_in``).
+        legs: :class:`~wbc.estimation.kernel_groups.Legs` (its outputs are filled for
+            ``q_in``).
         align: Out (4,): the yaw alignment, ``quat = align * quat_in / |quat_in|``.
         quat: Out (4,): the orientation (w, x, y, z).
         imu_position: Out (3,): the IMU site's world position [m].
         feet: Out (4, 3): the foot centres' world positions [m].
-        work: Scratch space (:data:`START_WORK_SIZE`).
+        work: The work record (its ``start_*`` arrays and ``legs`` are scratch).
     """
-    measured = work[0:4]
-    rotation = work[4:13].reshape((3, 3))
-    legs_work = work[13:49].reshape((4, 3, 3))
+    measured, rotation = work.start_measured, work.start_rotation
+    legs_work = work.legs[:]  # a plain array view, as leg_kinematics' signature takes
+    imu_offset, foot_position = legs.imu_offset, legs.foot_position
     norm = math.sqrt(quat_in[0] ** 2 + quat_in[1] ** 2 + quat_in[2] ** 2 + quat_in[3] ** 2)
     for k in range(4):
         measured[k] = quat_in[k] / norm
@@ -342,8 +359,8 @@ def start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, imu_offset, rota
     quat_multiply(align, measured, quat)
     quat_normalize(quat)
     quat_rotation(quat, rotation)
-    leg_kinematics(q_in, rotations, translations, axes, foot_offsets, foot_position,
-                   foot_jacobian, foot_angular_jacobian, legs_work)
+    leg_kinematics(q_in, legs.rotations, legs.translations, legs.axes, legs.foot_offsets,
+                   foot_position, legs.foot_jacobian, legs.foot_angular_jacobian, legs_work)
     height = 0.0
     for i in range(4):
         height += radius - (rotation[2, 0] * foot_position[i, 0]

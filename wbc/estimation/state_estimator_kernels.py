@@ -1,4 +1,4 @@
-"""The linear Kalman filter's compiled tick and start (:class:`wbc.StateEstimator`, ``kf``).
+"""The linear Kalman filter's compiled tick and start (:class:`wbc.LinearKalmanFilter`, ``kf``).
 
 The orientation follows the IMU's quaternion through a complementary filter on the
 gyroscope; the position and velocity are three independent 6-state filters, one per world
@@ -8,7 +8,10 @@ sample's checks, contacts, foot motion and outputs are :mod:`wbc.estimation.shar
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
+import numpy as np
 
 from wbc.core.conventions import GRAVITY_M_S2
 from wbc.core.quaternion_kernels import (
@@ -18,8 +21,8 @@ from wbc.core.quaternion_kernels import (
     quat_normalize,
     quat_rotation,
 )
+from wbc.estimation.kernel_groups import SHARED_WORK
 from wbc.estimation.shared_kernels import (
-    START_WORK_SIZE,
     account_trust,
     check_sample,
     foot_motion,
@@ -34,8 +37,26 @@ from wbc.estimation.state_estimate import QUATERNION_TIMEOUT
 _QUAT, _BIAS, _ALIGN, _OMEGA, _ACCEL = 0, 4, 7, 11, 14
 _QUAT_AGE_S = 17
 _STATE_SIZE = 18
-#: Scratch space of the tick's kernel and of the start [floats].
-_WORK_SIZE = 136
+#: The tick's and the start's work arrays, by name and shape (a work record:
+#: :func:`wbc.core.kernel_records.work_record`): the shared kernels' (:data:`SHARED_WORK`),
+#: then the orientation's quaternion steps and the world acceleration, the scalar updates'
+#: gain and ``P`` column, the orientation's matrix, and the start's IMU and feet positions.
+WORK_SHAPES: dict[str, tuple[int, ...]] = {
+    **SHARED_WORK, "step": (4,), "product": (4,), "measured": (4,), "inverse": (4,),
+    "error": (3,), "world_accel": (3,), "gain": (6,), "projected": (6,), "rotation": (3, 3),
+    "imu_position": (3,), "feet": (4, 3),
+}
+
+
+class KalmanArrays(NamedTuple):
+    """The filter's own arrays (in/out): ``state`` (:data:`_STATE_SIZE`: orientation
+    (w, x, y, z), gyro bias, yaw alignment, last good angular velocity and specific force,
+    the quaternion's age), and the three axes' filters, ``x`` (3, 6) and ``P`` (3, 6, 6):
+    ``[IMU position, IMU velocity, feet 0..3]``."""
+
+    state: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -56,25 +77,32 @@ def _scalar_update(x, P, plus, minus, measured, variance, gain, projected):  # p
 
 
 @numba.njit(cache=True)
-def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, force_in,
-              schedule, dt_nominal, params, imu_offset, rotations, translations, axes,
-              foot_offsets, foot_position, foot_jacobian, foot_angular_jacobian, clock, state,
-              x, P, foot_contact, foot_same_s, foot_good_s, foot_reason, foot_last, foot_cal,
-              joint_q, joint_dq, q_out, v_out, weight, work):  # pragma: no cover - compiled
+def _estimate(sample, schedule, params, legs, filter_state, sensors, outputs,
+              work):  # pragma: no cover - compiled
     """One tick of the estimator (see the module docstring); returns the fault flags.
 
-    ``state`` holds the orientation (w, x, y, z), the gyro bias, the yaw alignment, the last
-    good angular velocity and specific force, and the quaternion's age; ``x`` (3, 6) and
-    ``P`` (3, 6, 6) are the three axes' filters: ``[IMU position, IMU velocity, feet 0..3]``.
-    ``work`` (:data:`_WORK_SIZE`) is scratch space: the tick allocates nothing.
+    Args:
+        sample: This tick's :class:`~wbc.estimation.kernel_groups.Sample`.
+        schedule: Each foot's normal-force bound [N] (4,).
+        params: The parameter record (``LinearKalmanFilter``'s config fields by name, and
+            ``control_period_s``).
+        legs: :class:`~wbc.estimation.kernel_groups.Legs`.
+        filter_state: In/out :class:`KalmanArrays`.
+        sensors: In/out :class:`~wbc.estimation.kernel_groups.SensorState`.
+        outputs: Out :class:`~wbc.estimation.kernel_groups.Outputs`.
+        work: The work record (:data:`WORK_SHAPES`): the tick allocates nothing.
     """
-    (tau_q, tau_b, quat_tol, quat_timeout, sigma_p, sigma_v, sigma_f, sigma_pos, sigma_vel,
-     sigma_h, swing_scale, min_weight, radius) = (
-        params[0], params[1], params[2], params[3], params[4], params[5], params[6],
-        params[7], params[8], params[9], params[10], params[11], params[12])
+    p, w = params[0], work[0]
+    state, x, P = filter_state.state, filter_state.x, filter_state.P
+    quat_tol, quat_timeout, radius = (p.quaternion_tolerance, p.quaternion_timeout_s,
+                                      p.foot_radius_m)
+    sigma_pos, sigma_vel, sigma_h = (p.foot_position_noise_m, p.foot_velocity_noise_m_s,
+                                     p.foot_height_noise_m)
+    swing_scale, min_weight = p.swing_noise_scale, p.min_contact_weight
+    clock, weight, imu_offset = sensors.clock, outputs.contact, legs.imu_offset
+    gyro_in, accel_in = sample.gyroscope, sample.accelerometer
     flags, dt, new, quat_ok, gyro_ok, accel_ok, joints_ok = check_sample(
-        fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, clock, dt_nominal,
-        quat_tol)
+        sample, clock, p.control_period_s, quat_tol)
     # --- orientation: gyroscope, pulled towards the IMU's quaternion
     quat = state[_QUAT:_QUAT + 4]
     bias = state[_BIAS:_BIAS + 3]
@@ -82,33 +110,27 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     if gyro_ok:
         for k in range(3):
             omega[k] = gyro_in[k] - bias[k]
-    step, product, measured, inverse = work[0:4], work[4:8], work[8:12], work[12:16]
-    error, world_accel = work[16:19], work[19:22]
-    gain_vector, projected = work[22:28], work[28:34]
-    rotation = work[34:43].reshape((3, 3))
-    relative = work[43:55].reshape((4, 3))
-    velocity = work[55:67].reshape((4, 3))
-    rolling = work[67:79].reshape((4, 3))
-    legs_work = work[79:115].reshape((4, 3, 3))
-    motion_work = work[115:127].reshape((4, 3))
-    output_work = work[127:136].reshape((3, 3))
+    step, product, measured, inverse = w.step, w.product, w.measured, w.inverse
+    error, world_accel, rotation = w.error, w.world_accel, w.rotation
+    relative, velocity, rolling = w.relative, w.velocity, w.rolling
     quat_exp(omega[0] * dt, omega[1] * dt, omega[2] * dt, step)
     quat_multiply(quat, step, product)
     quat[:] = product
     if quat_ok:
-        quat_multiply(state[_ALIGN:_ALIGN + 4], quat_in, measured)
+        quat_multiply(state[_ALIGN:_ALIGN + 4], sample.quaternion, measured)
         quat_normalize(measured)
         inverse[0] = quat[0]
         for k in range(1, 4):
             inverse[k] = -quat[k]
         quat_multiply(inverse, measured, product)
         quat_log(product, error)
+        tau_q = p.orientation_time_constant_s
         gain = min(1.0, dt / tau_q)
         quat_exp(gain * error[0], gain * error[1], gain * error[2], step)
         quat_multiply(quat, step, product)
         quat[:] = product
         for k in range(3):
-            bias[k] -= error[k] * dt / (tau_q * tau_b)
+            bias[k] -= error[k] * dt / (tau_q * p.gyro_bias_time_constant_s)
         state[_QUAT_AGE_S] = 0.0
     else:
         state[_QUAT_AGE_S] += dt
@@ -117,13 +139,10 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
     quat_normalize(quat)
     quat_rotation(quat, rotation)
     # --- legs and contacts
-    flags |= legs_and_contacts(joints_ok, new, dt, q_in, dq_in, force_in, schedule, params,
-                               rotations, translations, axes, foot_offsets, foot_position,
-                               foot_jacobian, foot_angular_jacobian, legs_work, joint_q,
-                               joint_dq, foot_contact, foot_same_s, foot_good_s, foot_reason,
-                               foot_last, foot_cal, weight)
-    foot_motion(rotation, omega, joint_dq, imu_offset, foot_position, foot_jacobian,
-                foot_angular_jacobian, radius, relative, velocity, rolling, motion_work)
+    flags |= legs_and_contacts(joints_ok, new, dt, sample, schedule, p, legs, sensors, outputs,
+                               w.legs)
+    foot_motion(rotation, omega, outputs.joint_dq, imu_offset, legs, radius, relative,
+                velocity, rolling, w)
     # --- prediction: the accelerometer, world frame
     accel = state[_ACCEL:_ACCEL + 3]
     world_accel[:] = 0.0
@@ -134,6 +153,9 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
             world_accel[r] = (rotation[r, 0] * accel[0] + rotation[r, 1] * accel[1]
                               + rotation[r, 2] * accel[2])
         world_accel[2] -= GRAVITY_M_S2
+    sigma_p, sigma_v = p.position_process_noise, p.velocity_process_noise
+    sigma_f = p.foot_process_noise
+    gain_vector, projected = w.gain, w.projected
     for a in range(3):
         xa = x[a]
         Pa = P[a]
@@ -172,23 +194,22 @@ def _estimate(fresh, tick, stamp_s, quat_in, gyro_in, accel_in, q_in, dq_in, for
             _scalar_update(x[2], P[2], f, -1, radius, sigma_h * sigma_h * scale, gain_vector,
                            projected)
     write_outputs(rotation, quat, omega, x[0, 0], x[1, 0], x[2, 0], x[0, 1], x[1, 1], x[2, 1],
-                  imu_offset, joint_q, joint_dq, q_out, v_out, output_work)
+                  imu_offset, outputs, w)
     account_trust(flags, dt, clock)
     return flags
 
 
 @numba.njit(cache=True)
-def _start(quat_in, q_in, params, imu_offset, rotations, translations, axes, foot_offsets,
-           foot_position, foot_jacobian, foot_angular_jacobian, state, x, P, base_x, base_y,
-           keep_yaw, work):  # pragma: no cover - compiled
+def _start(quat_in, q_in, params, legs, filter_state, base_x, base_y, keep_yaw,
+           work):  # pragma: no cover - compiled
     """Start on four loaded feet, at rest, where :func:`start_pose` puts the base and the
-    feet; ``work`` is scratch space (:data:`_WORK_SIZE`)."""
-    sigma_pos, sigma_h, radius = params[7], params[9], params[12]
-    imu_position, feet = work[0:3], work[3:15].reshape((4, 3))
-    start_pose(quat_in, q_in, keep_yaw, base_x, base_y, radius, imu_offset, rotations,
-               translations, axes, foot_offsets, foot_position, foot_jacobian,
-               foot_angular_jacobian, state[_ALIGN:_ALIGN + 4], state[_QUAT:_QUAT + 4],
-               imu_position, feet, work[15:15 + START_WORK_SIZE])
+    feet; the groups are :func:`_estimate`'s."""
+    p, w = params[0], work[0]
+    state, x, P = filter_state.state, filter_state.x, filter_state.P
+    sigma_pos, sigma_h = p.foot_position_noise_m, p.foot_height_noise_m
+    imu_position, feet = w.imu_position, w.feet
+    start_pose(quat_in, q_in, keep_yaw, base_x, base_y, p.foot_radius_m, legs,
+               state[_ALIGN:_ALIGN + 4], state[_QUAT:_QUAT + 4], imu_position, feet, w)
     x[:, :] = 0.0
     P[:, :, :] = 0.0
     for a in range(3):
