@@ -1,8 +1,13 @@
-"""Shared fixtures: the GO2 description and model are loaded once per test session."""
+"""Shared fixtures: the GO2 description and model are loaded once per test session; on a fresh
+clone, the estimators' numba kernels compile in a second process while the tests start."""
 
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -30,6 +35,49 @@ def _offscreen_gl_in_this_process() -> None:
 
 # At conftest import, before any test module imports MuJoCo (none of the imports above does).
 _offscreen_gl_in_this_process()
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Run by a second process: both estimators' ticks on records of a GO2 at rest, which compiles
+#: their kernels into numba's cache (the closed-loop tests' signatures: same types and layouts).
+WARM_ESTIMATORS = """
+from tests.synthetic_records import pose, run, started
+from wbc import InvariantEkf, StateEstimator
+for kind in (InvariantEkf, StateEstimator):
+    run(started(kind), pose(), 3)
+"""
+_warmer: subprocess.Popen[bytes] | None = None
+_warmer_errors = tempfile.TemporaryFile()  # the warm-up's stderr (a pipe could fill and block)
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """On a fresh clone (no numba cache), compile the estimators' kernels in a second process.
+
+    Compiling every kernel on first use costs about 77 s on one core; the first closed-loop test
+    compiles the controller's (about half of it) first, and meanwhile the second core compiles
+    the estimators', which that test then loads from the cache. With a cache, nothing starts.
+    """
+    global _warmer
+    if (os.environ.get("NUMBA_DISABLE_JIT") == "1"
+            or any((ROOT / "wbc" / "estimation" / "__pycache__").glob("*.nbi"))):
+        return
+    _warmer = subprocess.Popen([sys.executable, "-c", WARM_ESTIMATORS], cwd=ROOT,
+                               stdout=subprocess.DEVNULL, stderr=_warmer_errors)
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """Stop the warm-up process if it still runs (a short selection of tests)."""
+    if _warmer is not None and _warmer.poll() is None:
+        _warmer.kill()
+        _warmer.wait()
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """Say so when the warm-up failed: the tests compiled the kernels themselves (only slower)."""
+    if _warmer is not None and _warmer.returncode not in (0, -9):
+        _warmer_errors.seek(0)
+        error = _warmer_errors.read().decode(errors="replace")
+        terminalreporter.write_line(f"numba warm-up of the estimators failed (exit "
+                                    f"{_warmer.returncode}): {error.strip()[-2000:]}")
 
 
 @pytest.fixture(scope="session")
