@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -20,21 +22,53 @@ def joint_types(joint_names: Sequence[str]) -> list[int]:
     return [JOINT_TYPES.index(name.split("_")[1]) for name in joint_names]
 
 
+class JointShaping(NamedTuple):
+    """The shaper's per-joint numbers (joints,), built once; ``kp``, ``kd`` change in place
+    with the legs' stance."""
+
+    #: Known joint damping [N m s/rad] and friction [N m] added along ``dq_des``.
+    damping: np.ndarray
+    friction: np.ndarray
+    #: The controller's torque limits [N m]: ``tau_ff`` stays inside.
+    tau_max: np.ndarray
+    #: The motors' effort limits [N m]: ``tau`` is clipped there.
+    effort_limit: np.ndarray
+    kp: np.ndarray
+    kd: np.ndarray
+    #: The friction's tanh velocity scale [rad/s].
+    velocity_scale: float
+
+
+class ReferenceState(NamedTuple):
+    """The :class:`JointReference`'s desired state (in/out) [rad], [rad/s] and bounds."""
+
+    q_des: np.ndarray
+    dq_des: np.ndarray
+    max_position_error: float
+    max_velocity_error: float
+
+
 #: The inputs (measured state, QP outputs): any float64 vector, read-only or not.
 _INPUT = numba.types.Array(numba.types.float64, 1, "A", readonly=True)
-_OWN, _F8 = numba.types.float64[::1], numba.types.float64
 
 
-# An explicit signature: compiled (or read from numba's cache) at import rather than at the
-# first tick, which it would stall for milliseconds. The shaper's own arrays are
-# C-contiguous.
-@numba.njit(numba.types.void(_INPUT, _INPUT, _INPUT, _INPUT, _F8, _OWN, _F8, _F8, _OWN, _OWN,
-                             _OWN, _OWN, _F8, _OWN, _OWN, _OWN, _OWN,
-                             numba.types.float64[:, ::1]), cache=True)
-def _shape(q, dq, qdd, tau_qp, dt, keep, max_position_error, max_velocity_error, q_ref,
-           dq_ref, damping, friction, velocity_scale, tau_max, kp, kd, effort_limit, out):
-    """Advance the joint reference (as :meth:`JointReference.advance`) and fill the command
-    rows ``out = [q_des, dq_des, kp, kd, tau_ff, tau]`` (6, n)."""
+@numba.njit(cache=True)
+def _shape(joints, reference, keep, dt, q, dq, qdd, tau_qp, out):  # pragma: no cover
+    """Advance the joint reference (as :meth:`JointReference.advance`) over ``dt`` [s] from
+    the measured ``q``, ``dq`` and the QP's ``qdd``, ``tau_qp``, and fill the command rows
+    ``out = [q_des, dq_des, kp, kd, tau_ff, tau]`` (6, n).
+
+    Args:
+        joints: :class:`JointShaping`.
+        reference: :class:`ReferenceState` (``q_des``, ``dq_des`` advanced in place).
+        keep: This period's decay factors (:meth:`JointReference.prepare`).
+    """
+    q_ref, dq_ref = reference.q_des, reference.dq_des
+    max_position_error, max_velocity_error = (reference.max_position_error,
+                                              reference.max_velocity_error)
+    damping, friction, tau_max = joints.damping, joints.friction, joints.tau_max
+    kp, kd, effort_limit = joints.kp, joints.kd, joints.effort_limit
+    velocity_scale = joints.velocity_scale
     for i in range(q.size):
         qr = q[i] + keep[i] * (q_ref[i] - q[i])
         dqr = dq[i] + keep[i] * (dq_ref[i] - dq[i]) + dt * qdd[i]
@@ -50,6 +84,27 @@ def _shape(q, dq, qdd, tau_qp, dt, keep, max_position_error, max_velocity_error,
         out[0, i], out[1, i], out[2, i], out[3, i] = qr, dqr, kp[i], kd[i]
         out[4, i] = tau_ff
         out[5, i] = min(max(tau, -effort_limit[i]), effort_limit[i])
+
+
+def _bind_shape(joints: JointShaping, reference: ReferenceState) -> Callable[..., None]:
+    """:func:`_shape`'s compiled overload (from numba's cache, else compiled now rather than
+    at the first tick) with the shaper's own groups bound: ``(keep, dt, q, dq, qdd, tau_qp,
+    out)`` per call, without the dispatcher's typing of every argument (the groups' would
+    cost a microsecond a call)."""
+    signature = (numba.typeof(joints), numba.typeof(reference), numba.float64[::1],
+                 numba.float64, _INPUT, _INPUT, _INPUT, _INPUT, numba.float64[:, ::1])
+    return functools.partial(_shape.compile(signature), joints, reference)
+
+
+def _float_vector(values: np.ndarray) -> np.ndarray:
+    """``values`` as the compiled shaping reads them: a float64 vector (itself when it is)."""
+    if type(values) is np.ndarray and values.dtype == np.float64 and values.ndim == 1:
+        return values
+    array = np.asarray(values, dtype=np.float64)
+    if array.ndim != 1:
+        raise ConfigurationError(f"expected a vector of joint values, received shape "
+                                 f"{array.shape}")
+    return array
 
 
 class MotorCommandShaper:
@@ -99,6 +154,12 @@ class MotorCommandShaper:
         self.kp = np.full(n, settings.stance_kp)
         self.kd = np.full(n, settings.stance_kd)
         self._out_shape = (6, n)
+        reference = self.reference
+        self._shape = _bind_shape(
+            JointShaping(self._damping, self._friction, self.tau_max, self.effort_limit,
+                         self.kp, self.kd, float(settings.friction_velocity_scale_rad_s)),
+            ReferenceState(reference.q_des, reference.dq_des, reference.max_position_error,
+                           reference.max_velocity_error))
 
     def set_stance(self, joints: Sequence[int], stance: bool) -> None:
         """Give a leg's joints (their indices) the stance or the swing gains and leak."""
@@ -119,12 +180,10 @@ class MotorCommandShaper:
             qdd: The QP's joint accelerations [rad/s^2] (joints,).
             tau_qp: The QP's joint torques [N m] (joints,).
         """
-        reference, cfg, dt = self.reference, self.settings, self.control_period_s
+        reference, dt = self.reference, self.control_period_s
         keep = reference.prepare(q, dq, dt)
         out = np.empty(self._out_shape)  # the command owns its arrays: one block, six views
-        _shape(q, dq, qdd, tau_qp, dt, keep, reference.max_position_error,
-               reference.max_velocity_error, reference.q_des, reference.dq_des, self._damping,
-               self._friction, cfg.friction_velocity_scale_rad_s, self.tau_max, self.kp,
-               self.kd, self.effort_limit, out)
+        self._shape(keep, dt, _float_vector(q), _float_vector(dq), _float_vector(qdd),
+                    _float_vector(tau_qp), out)
         return {"q_des": out[0], "dq_des": out[1], "kp": out[2], "kd": out[3],
                 "tau_ff": out[4], "tau": out[5]}
