@@ -9,8 +9,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
-import numpy as np
-
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_float, check_name, known_fields_only
 
@@ -121,16 +119,6 @@ class SensorModel:
     def as_dict(self) -> dict[str, Any]:
         """Plain values, JSON-ready."""
         return asdict(self)
-
-    def _vector(self) -> np.ndarray:
-        """The numbers the compiled sampler reads, in its order."""
-        return np.array([
-            self.gyro_noise_rad_s, self.gyro_bias_walk, self.accel_noise_m_s2,
-            self.accel_bias_walk, self.attitude_time_constant_s,
-            self.joint_position_noise_rad, self.joint_position_resolution_rad,
-            self.joint_velocity_noise_rad_s, self.joint_torque_noise_nm,
-            self.foot_force_offset, self.foot_force_gain, self.foot_force_noise,
-            self.foot_force_full_scale, float(self.foot_force_integer)])
 
 
 #: Upper bounds of the numeric fields (all are >= 0).

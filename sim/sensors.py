@@ -31,13 +31,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
 
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from wbc.core.errors import ConfigurationError
+from wbc.core.kernel_records import parameter_record
 from wbc.core.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, rotate_inverse
 from wbc.core.validation import check_name
 from wbc.model.description import LEGS
@@ -59,43 +60,100 @@ _GRAVITY = 9.81
 
 # ------------------------------------------------------------------------- the sampler
 
-_F8 = numba.float64
-_V = _F8[::1]
-_VS = _F8[:]
+#: The sensor model's fields the compiled sampler reads (by name, from a parameter record).
+_PARAMS = ("gyro_noise_rad_s", "gyro_bias_walk", "accel_noise_m_s2", "accel_bias_walk",
+           "attitude_time_constant_s", "joint_position_noise_rad",
+           "joint_position_resolution_rad", "joint_velocity_noise_rad_s",
+           "joint_torque_noise_nm", "foot_force_offset", "foot_force_gain", "foot_force_noise",
+           "foot_force_full_scale", "foot_force_integer")
 
 
-@numba.njit(numba.void(_V, _V, numba.intp[::1], numba.intp[::1], numba.intp[::1], _VS, _VS,
-                       _F8, _V, _V, numba.boolean, _V, _V, _V, _V, _V, _V, _V, _V, _V, _V,
-                       _V, _V, _V),
-            cache=True)
-def _sample(qpos, qvel, joint_qpos, joint_dof, leg_rows, actuator_force, touch, dt,
-            imu_offset, site_velocity, has_previous, noise, params, gyro_bias, accel_bias,
-            attitude, integral, quaternion, gyroscope, accelerometer, q, dq, tau,
-            feet):  # pragma: no cover - compiled
+def sampler_params(model: SensorModel) -> np.ndarray:
+    """The parameter record of ``model`` the compiled sampler reads (:data:`_PARAMS`)."""
+    return parameter_record({name: bool(getattr(model, name)) if name == "foot_force_integer"
+                             else float(getattr(model, name)) for name in _PARAMS})
+
+
+class PlantReading(NamedTuple):
+    """What the plant gives a sample: MuJoCo's free-joint state ``qpos``, ``qvel`` (world
+    linear velocity, body angular velocity), each joint's applied torque [N m] (robot joint
+    order), each foot's normal force [N] (``LEGS`` order), the time since the previous
+    sample [s] and whether there was one (else the IMU site is taken as not accelerating)."""
+
+    qpos: np.ndarray
+    qvel: np.ndarray
+    actuator_force: np.ndarray
+    touch: np.ndarray
+    dt: float
+    has_previous: bool
+
+
+class SensorSites(NamedTuple):
+    """Where the sensors read the plant: each joint's qpos and qvel index (robot joint
+    order), the row of ``touch`` of each foot (robot leg order), the IMU in the base [m]."""
+
+    joint_qpos: np.ndarray
+    joint_dof: np.ndarray
+    leg_rows: np.ndarray
+    imu_offset: np.ndarray
+
+
+class SensorDrift(NamedTuple):
+    """The sensors' state between samples (in/out): the IMU site's last world velocity, the
+    walking biases, the attitude filter's quaternion ``(w, x, y, z)`` and integral term
+    [rad/s]."""
+
+    site_velocity: np.ndarray
+    gyro_bias: np.ndarray
+    accel_bias: np.ndarray
+    attitude: np.ndarray
+    integral: np.ndarray
+
+
+class RecordArrays(NamedTuple):
+    """Out: a :class:`wbc.SensorRecord`'s arrays the sample fills."""
+
+    quaternion: np.ndarray
+    gyroscope: np.ndarray
+    accelerometer: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    tau: np.ndarray
+    feet: np.ndarray
+
+    @classmethod
+    def of(cls, record: SensorRecord) -> RecordArrays:
+        """The group of ``record``'s own arrays."""
+        return cls(record.imu_quaternion_wxyz, record.gyroscope_rad_s,
+                   record.accelerometer_m_s2, record.q, record.dq, record.tau_est,
+                   record.foot_force)
+
+
+@numba.njit(cache=True)
+def _sample(plant, sites, params, drift, noise, out):  # pragma: no cover - compiled
     """One sensor sample from MuJoCo's state (see the module docstring).
 
     Args:
-        qpos, qvel: MuJoCo's free-joint state (world linear velocity, body angular velocity).
-        joint_qpos, joint_dof: qpos / qvel index of each joint, in the robot's joint order.
-        leg_rows: Row of ``touch`` (``LEGS`` order) of each foot, in the robot's leg order.
-        actuator_force: Each joint's applied torque [N m], in the robot's joint order.
-        touch: Normal force on each foot [N], ``LEGS`` order.
-        dt: Time since the previous sample [s].
-        imu_offset: The IMU site in the base frame [m].
-        site_velocity: In/out: the IMU site's world velocity at the previous sample.
-        has_previous: There was a previous sample (else the site is taken as not
-            accelerating).
+        plant: :class:`PlantReading`.
+        sites: :class:`SensorSites`.
+        params: The parameter record (:func:`sampler_params`).
+        drift: In/out :class:`SensorDrift`.
         noise: Standard normal draws (52,).
-        params: :meth:`SensorModel._vector`.
-        gyro_bias, accel_bias: In/out: the biases (they walk).
-        attitude: In/out: the attitude filter's quaternion ``(w, x, y, z)``.
-        integral: In/out: its integral term [rad/s] (minus the gyro bias it has learnt).
-        quaternion, gyroscope, accelerometer, q, dq, tau, feet: Out: the record's arrays.
+        out: Out :class:`RecordArrays`.
     """
-    (gyro_noise, gyro_walk, accel_noise, accel_walk, tau_attitude, q_noise, q_step,
-     dq_noise, tau_noise, ff_offset, ff_gain, ff_noise, ff_full, ff_integer) = (
-        params[0], params[1], params[2], params[3], params[4], params[5], params[6],
-        params[7], params[8], params[9], params[10], params[11], params[12], params[13])
+    p = params[0]
+    gyro_noise, gyro_walk = p.gyro_noise_rad_s, p.gyro_bias_walk
+    accel_noise, accel_walk = p.accel_noise_m_s2, p.accel_bias_walk
+    tau_attitude = p.attitude_time_constant_s
+    q_noise, q_step = p.joint_position_noise_rad, p.joint_position_resolution_rad
+    dq_noise, tau_noise = p.joint_velocity_noise_rad_s, p.joint_torque_noise_nm
+    ff_offset, ff_gain, ff_noise = p.foot_force_offset, p.foot_force_gain, p.foot_force_noise
+    ff_full, ff_integer = p.foot_force_full_scale, p.foot_force_integer
+    qpos, qvel, dt = plant.qpos, plant.qvel, plant.dt
+    imu_offset, site_velocity = sites.imu_offset, drift.site_velocity
+    gyro_bias, accel_bias = drift.gyro_bias, drift.accel_bias
+    attitude, integral = drift.attitude, drift.integral
+    quaternion, gyroscope, accelerometer = out.quaternion, out.gyroscope, out.accelerometer
     true_quat = qpos[3:7]
     omega = qvel[3:6]
     # IMU site's world velocity: v_base + R (omega x r).
@@ -110,7 +168,7 @@ def _sample(qpos, qvel, joint_qpos, joint_dof, leg_rows, actuator_force, touch, 
     vy = qvel[1] + r10 * cx + r11 * cy + r12 * cz
     vz = qvel[2] + r20 * cx + r21 * cy + r22 * cz
     force = np.empty(3)
-    if has_previous and dt > 0.0:
+    if plant.has_previous and dt > 0.0:
         force[0] = (vx - site_velocity[0]) / dt
         force[1] = (vy - site_velocity[1]) / dt
         force[2] = (vz - site_velocity[2]) / dt + _GRAVITY
@@ -160,6 +218,9 @@ def _sample(qpos, qvel, joint_qpos, joint_dof, leg_rows, actuator_force, touch, 
         quat_normalize(quaternion)
         for k in range(4):
             attitude[k] = quaternion[k]
+    q, dq, tau, feet = out.q, out.dq, out.tau, out.feet
+    joint_qpos, joint_dof, leg_rows = sites.joint_qpos, sites.joint_dof, sites.leg_rows
+    actuator_force, touch = plant.actuator_force, plant.touch
     for j in range(q.shape[0]):
         angle = qpos[joint_qpos[j]] + q_noise * noise[12 + j]
         if q_step > 0.0:
@@ -170,7 +231,7 @@ def _sample(qpos, qvel, joint_qpos, joint_dof, leg_rows, actuator_force, touch, 
     for i in range(feet.shape[0]):
         count = ff_offset + ff_gain * touch[leg_rows[i]] + ff_noise * noise[48 + i]
         count = min(max(count, 0.0), ff_full)
-        if ff_integer > 0.0:
+        if ff_integer:
             count = math.floor(count + 0.5)
         feet[i] = count
 
@@ -210,7 +271,18 @@ class SimulatedSensors:
         from wbc.model.leg_kinematics import LegKinematics
 
         self._imu_offset = LegKinematics(sim.description).imu_offset.copy()
-        self._params = model._vector()
+        self._params = sampler_params(model)
+        self._sites = SensorSites(self._joint_qpos, self._joint_dof, self._leg_rows,
+                                  self._imu_offset)
+        # The compiled overload, bound: no dispatcher typing of the groups every sample.
+        # Any float64 vectors (the plant's and the record's: 'A' layout).
+        vector = numba.float64[:]
+        self._compiled = _sample.compile((
+            numba.types.NamedTuple((vector, vector, vector, vector, numba.float64,
+                                    numba.boolean), PlantReading),
+            numba.typeof(self._sites), numba.typeof(self._params),
+            numba.types.NamedTuple((vector,) * 5, SensorDrift), vector,
+            numba.types.NamedTuple((vector,) * 7, RecordArrays)))
         self.reset()
 
     def reset(self) -> None:
@@ -222,6 +294,8 @@ class SimulatedSensors:
         self._attitude = self._settled_attitude()
         self._integral = np.zeros(3)
         self._site_velocity = np.zeros(3)
+        self._drift = SensorDrift(self._site_velocity, self.gyro_bias, self.accel_bias,
+                                  self._attitude, self._integral)
         self._has_previous = False
         self._last_s = self.sim.time_s
         self._noise = np.zeros((_NOISE_BLOCK, _CHANNELS))  # the exact model's stays zero
@@ -263,13 +337,11 @@ class SimulatedSensors:
             if not self.model.is_exact:
                 self._rng.standard_normal(out=self._noise)
             self._row = 0
-        _sample(sim.qpos, sim.qvel, self._joint_qpos, self._joint_dof, self._leg_rows,
-                sim.actuator_torque(), sim.foot_normal_forces(), now - self._last_s,
-                self._imu_offset, self._site_velocity, self._has_previous,
-                self._noise[self._row], self._params, self.gyro_bias, self.accel_bias,
-                self._attitude, self._integral, record.imu_quaternion_wxyz, record.gyroscope_rad_s,
-                record.accelerometer_m_s2, record.q, record.dq, record.tau_est,
-                record.foot_force)
+        self._compiled(
+            PlantReading(sim.qpos, sim.qvel, sim.actuator_torque(), sim.foot_normal_forces(),
+                         now - self._last_s, self._has_previous),
+            self._sites, self._params, self._drift, self._noise[self._row],
+            RecordArrays.of(record))
         self._row += 1
         self._has_previous = True
         self._last_s = now

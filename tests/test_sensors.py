@@ -12,7 +12,17 @@ import pytest
 import sim.sensors as sensors_module
 from actions.robot.robot_interface import MappedRobot
 from sim.mujoco_robot import MujocoRobot
-from sim.sensors import SENSOR_PRESETS, SensorModel, SimulatedSensors, _sample
+from sim.sensors import (
+    SENSOR_PRESETS,
+    PlantReading,
+    RecordArrays,
+    SensorDrift,
+    SensorModel,
+    SensorSites,
+    SimulatedSensors,
+    _sample,
+    sampler_params,
+)
 from sim.simulator import Go2Simulator
 from wbc.core.errors import ConfigurationError, NonFiniteError, UnknownNameError
 from wbc.model.description import LEGS, UNITREE_SDK_JOINT_NAMES, UNITREE_SDK_LEGS
@@ -163,7 +173,7 @@ def test_the_noise_block_size_changes_no_value_and_a_reset_simulator_is_sampled(
 def attitude_errors(accel_bias, seconds: float = 20.0, tilt_start_deg: float = 0.0):
     """The simulated IMU's attitude filter on a level robot at rest: its roll error [deg]
     every 2 s, with a constant accelerometer bias (and a start tilted about x)."""
-    params = SensorModel.preset("exact").with_params(attitude_time_constant_s=5.0)._vector()
+    params = sampler_params(SensorModel.preset("exact").with_params(attitude_time_constant_s=5.0))
     qpos = np.zeros(19)
     qpos[3] = 1.0
     half = math.radians(tilt_start_deg) / 2
@@ -173,10 +183,11 @@ def attitude_errors(accel_bias, seconds: float = 20.0, tilt_start_deg: float = 0
     joints = np.arange(7, 19, dtype=np.intp)
     rolls = []
     for k in range(int(seconds * 1000) + 1):
-        _sample(qpos, np.zeros(18), joints, joints - 1, np.arange(4, dtype=np.intp),
-                np.zeros(12), np.zeros(4), 1e-3, np.zeros(3), np.zeros(3), k > 0, np.zeros(52),
-                params, np.zeros(3), np.asarray(accel_bias, float), attitude, np.zeros(3),
-                *outputs)
+        _sample(PlantReading(qpos, np.zeros(18), np.zeros(12), np.zeros(4), 1e-3, k > 0),
+                SensorSites(joints, joints - 1, np.arange(4, dtype=np.intp), np.zeros(3)),
+                params, SensorDrift(np.zeros(3), np.zeros(3), np.asarray(accel_bias, float),
+                                    attitude, np.zeros(3)),
+                np.zeros(52), RecordArrays(*outputs))
         if k % 2000 == 0:
             w, x = outputs[0][0], outputs[0][1]
             rolls.append(math.degrees(2 * math.atan2(x, w)))
