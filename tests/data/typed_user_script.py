@@ -43,9 +43,9 @@ reveal_type(outcome.status)  # expect: actions.goal_status.GoalStatus
 succeeded: bool = outcome.status is GoalStatus.SUCCEEDED
 HighFiveGoal(height=0.3)  # type: ignore[call-arg]
 
-reveal_type(StateEstimator)  # expect: -> wbc.estimation.state_estimator.StateEstimator
+reveal_type(StateEstimator)  # expect: -> wbc.estimation.linear_kalman_filter.LinearKalmanFilter
 reveal_type(InvariantEkf)  # expect: -> wbc.estimation.invariant_ekf.InvariantEkf
-reveal_type(make_estimator)  # expect: -> wbc.estimation.state_estimator.EstimatorBase
+reveal_type(make_estimator)  # expect: -> wbc.estimation.estimator_base.EstimatorBase
 reveal_type(SensorRecord)  # expect: -> wbc.robot_io.sensor_record.SensorRecord
 reveal_type(available_backends())  # expect: list[str]
 reveal_type(RobotLoop)  # expect: -> actions.robot.control_loop.ControlLoop

@@ -1,6 +1,6 @@
 """What an estimator gives the controller each tick: the estimate, its fault flags, their words.
 
-Every estimator here (:class:`wbc.StateEstimator`, :class:`wbc.InvariantEkf`) fills the same
+Every estimator here (:class:`wbc.LinearKalmanFilter`, :class:`wbc.InvariantEkf`) fills the same
 :class:`StateEstimate` and raises the same flags, so the control loop, the run's log and the
 tests read either the same way.
 """
