@@ -78,6 +78,21 @@ class PlantCase:
                                for name, value in (gains or {}).items()}, **run)
 
 
+def controller_parts(gains: dict[str, Any] | None, *,
+                     control_period_s: float) -> dict[str, dict[str, Any]]:
+    """A sweep file's gains (bare names: ``swing_kp``) as :class:`wbc.ControllerConfig`'s
+    parts (``{"shaping": {"swing_kp": ...}}``), with the control period: the keyword
+    arguments of the controller.
+
+    Raises:
+        UnknownNameError: A name that is no parameter (the nearest and the valid ones).
+    """
+    parts: dict[str, dict[str, Any]] = {"solver": {"control_period_s": control_period_s}}
+    for name, value in (gains or {}).items():
+        parts.setdefault(ControllerConfig.path_of(name).split(".")[0], {})[name] = value
+    return parts
+
+
 MENAGERIE = Plant.preset("menagerie")
 GO2_SENSORS = SensorModel.preset("go2")
 #: The default plant, sensors and period: every function's default case.

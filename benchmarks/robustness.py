@@ -52,6 +52,7 @@ from benchmarks.plant_cases import (
     QUICK_PLANT_CASES,
     SWEEP_HOLD_S,
     PlantCase,
+    controller_parts,
 )
 from benchmarks.reporting import machine
 from benchmarks.robustness_report import format_report
@@ -254,7 +255,8 @@ def run_episode(case: PlantCase = NOMINAL_CASE, *, push: Push | None = None,
                                 gains=gains)
     controller = None
     if gains:
-        controller = WholeBodyController(episode.controller_config)
+        controller = WholeBodyController(**controller_parts(
+            gains, control_period_s=case.control_period_s))
     return measured_high_five(episode, measure=measure, controller=controller).row()
 
 

@@ -46,7 +46,7 @@ from typing import Any
 import yaml
 
 from benchmarks import robustness
-from benchmarks.plant_cases import PlantCase
+from benchmarks.plant_cases import PlantCase, controller_parts
 from benchmarks.sweep_values import (
     CASE_FIELDS,
     DIRECTIONS,
@@ -288,10 +288,8 @@ class EpisodeSpec:
             ConfigurationError: The plant or controller parameters do not go together.
         """
         case = self.plant_case()
-        parts: dict[str, dict[str, Any]] = {"solver": {"control_period_s": case.control_period_s}}
-        for name, value in self.section("gains").items():  # a sweep file names them bare
-            parts.setdefault(ControllerConfig.path_of(name).split(".")[0], {})[name] = value
-        config = ControllerConfig(**parts)
+        config = ControllerConfig(**controller_parts(self.section("gains"),
+                                                     control_period_s=case.control_period_s))
         push = self.push()
         episode = self.episode()
         return {

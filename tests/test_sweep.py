@@ -34,9 +34,9 @@ def serial(tmp_path_factory):
     messages: list[str] = []
     execute, controller = sweep_runner.execute, robustness.WholeBodyController
 
-    def recorded_controller(**gains):
-        controllers.append(gains)
-        return controller(**gains)
+    def recorded_controller(**parts):
+        controllers.append(parts)
+        return controller(**parts)
 
     def interrupted(episode):
         if len(runs) == 2:
@@ -92,7 +92,8 @@ def test_the_quick_sweep_runs_its_pushes_plants_and_gains(serial):
         assert record["spec"]["controller"]["swing_kp"] == 45.0
         assert record["spec"]["push"]["force_n"] == pytest.approx(80.0)
     # The episode built its controller with the sweep's gain.
-    assert serial.controllers == [{"control_period_s": 1e-3, "swing_kp": 45.0}] * 4
+    assert serial.controllers == [{"solver": {"control_period_s": 1e-3},
+                                   "shaping": {"swing_kp": 45.0}}] * 4
     table = serial.run.report.table().splitlines()
     assert table[3:6] == QUICK_TABLE and table[-1] == QUICK_TOTALS
 
