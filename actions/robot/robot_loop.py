@@ -33,6 +33,9 @@ if TYPE_CHECKING:
     from actions.robot.loop_behaviours import LoopBehaviours
 
 TickHook = Callable[["RobotLoop", ControlOutput], None]
+# The stages by plain name: the tick marks eight of them, and a member looked up on its enum
+# class costs about 0.1 us in Python 3.11 (several times that on a loaded machine).
+_READ, _ESTIMATE, _ACTIONS, _CONTROLLER, _GUARD, _WRITE, _RELAY, _HOOKS = Stage
 
 
 class RobotLoop:
@@ -117,21 +120,21 @@ class RobotLoop:
         Returns:
             The command written, unless a filter's replaced it (``None``).
         """
-        robot = self.robot
+        robot, mark = self.robot, timer.mark
         timer.start()
         now = robot.time_s
         # -- sense
         if self.estimator is None:
             q, v = robot.read_state()
             fresh = True
-            timer.mark(Stage.READ)
+            mark(_READ)
         else:
             record = robot.read_sensors()
             fresh = record is not None
-            timer.mark(Stage.READ)
+            mark(_READ)
             q, v = self.estimate_state(record)
         self.context.observe(now, q, v)
-        timer.mark(Stage.ESTIMATE)
+        mark(_ESTIMATE)
         override = None
         for each in filters:
             command = each.sensed(now, fresh)
@@ -141,32 +144,32 @@ class RobotLoop:
         out = None
         if override is None:
             self.runner.tick(now)
-            timer.mark(Stage.ACTIONS)
+            mark(_ACTIONS)
             stale = ""
             for each in filters:
                 reason = each.stale(now)
                 stale = stale or reason
             decided = self.command(q, v, stale=stale)
-            timer.mark(Stage.CONTROLLER)
+            mark(_CONTROLLER)
             out = self.guard(decided, v)
             self.context.record_output(out)
             self.last_output = out
-            timer.mark(Stage.GUARD)
+            mark(_GUARD)
             # -- act
             robot.write_command(out)
         else:
-            timer.mark(Stage.ACTIONS)
-            timer.mark(Stage.CONTROLLER)
-            timer.mark(Stage.GUARD)
+            mark(_ACTIONS)
+            mark(_CONTROLLER)
+            mark(_GUARD)
             robot.write_command(override)
-        timer.mark(Stage.WRITE)
+        mark(_WRITE)
         for relay in relays:
             relay()
-        timer.mark(Stage.RELAY)
+        mark(_RELAY)
         if out is not None:
             for hook in self.hooks:
                 hook(self, out)
-        timer.mark(Stage.HOOKS)
+        mark(_HOOKS)
         return out
 
     def spin_once(self) -> ControlOutput:
