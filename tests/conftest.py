@@ -41,8 +41,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: their kernels into numba's cache (the closed-loop tests' signatures: same types and layouts).
 WARM_ESTIMATORS = """
 from tests.synthetic_records import pose, run, started
-from wbc import InvariantEkf, StateEstimator
-for kind in (InvariantEkf, StateEstimator):
+from wbc import InvariantEkf, LinearKalmanFilter
+for kind in (InvariantEkf, LinearKalmanFilter):
     run(started(kind), pose(), 3)
 """
 _warmer: subprocess.Popen[bytes] | None = None
