@@ -371,7 +371,8 @@ def sim_loop(clock: FakeClock | None = None, pose: str = "standing"
     sim.reset(pose)
     plant.sensors.reset()
     robot = TestRobot(plant, clock)
-    return ControlLoop(robot, WholeBodyController(solver={"control_period_s": PERIOD_S})), robot, plant
+    controller = WholeBodyController(solver={"control_period_s": PERIOD_S})
+    return ControlLoop(robot, controller), robot, plant
 
 
 def realtime(loop: ControlLoop, clock: FakeClock, **kwargs) -> RealtimeLoop:
