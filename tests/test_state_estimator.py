@@ -18,6 +18,7 @@ from tests.synthetic_records import (
     started,
 )
 from wbc.core.errors import ConfigurationError, UnknownNameError
+from wbc.estimation.estimator_base import sample_values
 from wbc.estimation.estimator_config import EstimatorConfig
 from wbc.estimation.invariant_ekf import InvariantEkf
 from wbc.estimation.kernel_groups import Sample
@@ -124,6 +125,17 @@ def test_stale_and_missing_samples_are_untrusted_and_unusable_after_the_timeout(
     estimate = estimator.update(record(q, tick=11), LOADED)
     assert estimate.trusted and estimate.usable and estimate.faults == ""
     assert estimate.q[2] == pytest.approx(expected_height(q), abs=1e-6)
+
+
+def test_the_tick_passes_the_sample_in_its_groups_field_order():
+    sample = record(pose(), tick=7)
+    group = Sample(*sample_values(True, sample))
+    assert group.fresh is True and group.tick == 7.0 and group.stamp_s == sample.stamp_s
+    assert group.quaternion is sample.imu_quaternion_wxyz
+    assert group.gyroscope is sample.gyroscope_rad_s
+    assert group.accelerometer is sample.accelerometer_m_s2
+    assert group.q is sample.q and group.dq is sample.dq
+    assert group.foot_force is sample.foot_force
 
 
 def test_time_predicted_without_samples_is_not_predicted_again():

@@ -45,11 +45,17 @@ from wbc.model.leg_kinematics import LegKinematics
 from wbc.robot_io.sensor_record import SensorRecord, check_description_orders
 
 
-def _sample(fresh: bool, record: SensorRecord) -> Sample:
-    """The kernels' :class:`Sample` of ``record`` (its own arrays)."""
-    return Sample(fresh, float(record.tick), record.stamp_s, record.imu_quaternion_wxyz,
-                  record.gyroscope_rad_s, record.accelerometer_m_s2, record.q, record.dq,
-                  record.foot_force)
+def sample_values(fresh: bool, record: SensorRecord) -> tuple[Any, ...]:
+    """The values of the kernels' :class:`Sample` of ``record`` (its own arrays), in the
+    order of its fields: ``Sample(*sample_values(...))`` is the group.
+
+    The tick passes this plain tuple to the kernel's bound overload for :class:`Sample`,
+    whose entry point unboxes a tuple by position: building the ``NamedTuple`` itself every
+    tick (its Python ``__new__``) cost 0.3 to 0.9 us more on the 2-core test machine.
+    """
+    return (fresh, float(record.tick), record.stamp_s, record.imu_quaternion_wxyz,
+            record.gyroscope_rad_s, record.accelerometer_m_s2, record.q, record.dq,
+            record.foot_force)
 
 
 class EstimatorBase:
@@ -256,13 +262,14 @@ class EstimatorBase:
                         self._foot_reason, self._foot_last, self._foot_cal),
             Outputs(self._joint_q, self._joint_dq, estimate.q, estimate.v, estimate.contact),
             self._work)
-        compiled = bind_compiled(self.kernel, _sample(True, self._input), *groups).func
+        compiled = bind_compiled(self.kernel, Sample(*sample_values(True, self._input)),
+                                 *groups).func
         #: The arrays that cross into compiled code every tick besides the sample's.
         self._tick_arrays = tuple(
             a for group in groups for a in (group if isinstance(group, tuple) else (group,)))
 
         def tick(fresh: bool, record: SensorRecord) -> int:
-            return compiled(_sample(fresh, record), *groups)
+            return compiled(sample_values(fresh, record), *groups)
 
         return tick
 
