@@ -121,13 +121,6 @@ class RecordArrays(NamedTuple):
     tau: np.ndarray
     feet: np.ndarray
 
-    @classmethod
-    def of(cls, record: SensorRecord) -> RecordArrays:
-        """The group of ``record``'s own arrays."""
-        return cls(record.imu_quaternion_wxyz, record.gyroscope_rad_s,
-                   record.accelerometer_m_s2, record.q, record.dq, record.tau_est,
-                   record.foot_force)
-
 
 @numba.njit(cache=True)
 def _sample(plant, sites, params, drift, noise, out):  # pragma: no cover - compiled
@@ -274,8 +267,10 @@ class SimulatedSensors:
         self._params = sampler_params(model)
         self._sites = SensorSites(self._joint_qpos, self._joint_dof, self._leg_rows,
                                   self._imu_offset)
-        # The compiled overload, bound: no dispatcher typing of the groups every sample.
-        # Any float64 vectors (the plant's and the record's: 'A' layout).
+        # The compiled overload, bound: no dispatcher typing of the groups every sample (any
+        # float64 vectors: the plant's and the record's, 'A' layout). Its entry point
+        # unboxes a tuple by position: the per-sample groups go as plain tuples in their
+        # fields' order (building the NamedTuples every sample costs more than the call).
         vector = numba.float64[:]
         self._compiled = _sample.compile((
             numba.types.NamedTuple((vector, vector, vector, vector, numba.float64,
@@ -338,10 +333,11 @@ class SimulatedSensors:
                 self._rng.standard_normal(out=self._noise)
             self._row = 0
         self._compiled(
-            PlantReading(sim.qpos, sim.qvel, sim.actuator_torque(), sim.foot_normal_forces(),
-                         now - self._last_s, self._has_previous),
+            (sim.qpos, sim.qvel, sim.actuator_torque(), sim.foot_normal_forces(),
+             now - self._last_s, self._has_previous),  # a PlantReading
             self._sites, self._params, self._drift, self._noise[self._row],
-            RecordArrays.of(record))
+            (record.imu_quaternion_wxyz, record.gyroscope_rad_s, record.accelerometer_m_s2,
+             record.q, record.dq, record.tau_est, record.foot_force))  # a RecordArrays
         self._row += 1
         self._has_previous = True
         self._last_s = now
