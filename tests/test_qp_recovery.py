@@ -48,7 +48,8 @@ def test_a_solver_failure_is_solved_again_by_a_fresh_workspace_of_the_same_backe
 
 
 def test_an_infeasible_qp_is_still_named_by_daqp_whatever_the_backend(description):
-    controller = WholeBodyController(solver={"backend": "osqp"}, limits={"torque_limit_fraction": 0.01})
+    controller = WholeBodyController(solver={"backend": "osqp"},
+                                     limits={"torque_limit_fraction": 0.01})
     q = description.pose("standing")
     controller.reset(q)
     out = controller.step(q, np.zeros(18))
