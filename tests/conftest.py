@@ -49,6 +49,26 @@ _warmer: subprocess.Popen[bytes] | None = None
 _warmer_errors = tempfile.TemporaryFile()  # the warm-up's stderr (a pipe could fill and block)
 
 
+#: The quick stage's tests measured at 2 s or more, which run in the slow stage.
+SLOW_STAGE_LIST = ROOT / "tests" / "slow_stage.txt"
+
+
+def slow_stage_ids(path: Path = SLOW_STAGE_LIST) -> list[str]:
+    """The node ids listed in ``tests/slow_stage.txt`` (a line: an id, then ``  # seconds``)."""
+    lines = path.read_text().splitlines()
+    return [line.rsplit("  # ", 1)[0].strip() for line in lines
+            if line.strip() and not line.startswith("#")]
+
+
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` deselects by mark
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark the listed tests slow, as their own ``@pytest.mark.slow`` would."""
+    listed = set(slow_stage_ids())
+    for item in items:
+        if item.nodeid in listed:
+            item.add_marker(pytest.mark.slow)
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     """On a fresh clone (no numba cache), compile the estimators' kernels in a second process.
 
