@@ -17,10 +17,9 @@ demo: $(STAMP)
 	$(BIN)/go2-wbc high-five
 
 # The suite in two stages (both run by CI, .ci/run): `make test` is every area, each sweep by
-# a quick representative (578 s, 9 min 38 s, on 2 cores from a fresh clone; the whole suite
-# took 17 to 19 min); `make test-slow` is the rest of the sweeps and the multi-minute
-# multi-process and packaging checks (about 10 min, estimated from the last full run's
-# per-test times). The README's Tests section says what each holds.
+# a quick representative (under 5 minutes on 2 cores from a fresh clone); `make test-slow` is
+# the rest: the sweeps' other values, the multi-process and packaging checks, and the tests
+# listed in tests/slow_stage.txt. The README's Tests section says what each holds and how long.
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
 

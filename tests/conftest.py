@@ -49,7 +49,7 @@ _warmer: subprocess.Popen[bytes] | None = None
 _warmer_errors = tempfile.TemporaryFile()  # the warm-up's stderr (a pipe could fill and block)
 
 
-#: The quick stage's tests measured at 2 s or more, which run in the slow stage.
+#: The quick stage's tests measured at 1 s or more, which run in the slow stage.
 SLOW_STAGE_LIST = ROOT / "tests" / "slow_stage.txt"
 
 
