@@ -139,8 +139,7 @@ class PlacoController:
             self._configure_foot(leg)
         self._tau_good = np.zeros(self._nj)
         self._last: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.ticks = 0
-        self.failures = 0
+        self.ticks = self.failures = 0
 
     # ------------------------------------------------------------------ references
 
@@ -219,8 +218,7 @@ class PlacoController:
 
     def com_velocity(self) -> np.ndarray:
         """Centre-of-mass velocity [m/s] at the last state."""
-        robot = self.robot
-        return np.asarray(robot.com_jacobian() @ robot.state.qd, dtype=float).reshape(3)
+        return np.asarray(self.robot.com_jacobian() @ self.robot.state.qd, float).reshape(3)
 
     def foot_position(self, leg: str) -> np.ndarray:
         """World position [m] of a foot frame (sphere centre) at the last state."""
@@ -349,8 +347,7 @@ class PlacoController:
         )
 
     def _update_model(self, q: np.ndarray, v: np.ndarray) -> None:
-        self.robot.state.q = q
-        self.robot.state.qd = v
+        self.robot.state.q, self.robot.state.qd = q, v
         self.robot.update_kinematics()
         self._q = q
 
