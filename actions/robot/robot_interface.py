@@ -221,6 +221,8 @@ class MappedRobot:
         self._leg_inverse = np.argsort(np.array([DESCRIPTION_ORDERS.leg_names.index(leg)
                                                  for leg in legs]))
         self._record = SensorRecord.zeros()
+        self._true_state_of: object = None  # the robot has_true_state last judged
+        self._true_state = False
 
     @property
     def time_s(self) -> float:
@@ -230,7 +232,11 @@ class MappedRobot:
     @property
     def has_true_state(self) -> bool:
         """The robot knows its exact state (a simulator)."""
-        return isinstance(self.robot, TrueState)
+        robot = self.robot
+        if self._true_state_of is not robot:  # once per robot: a protocol's isinstance costs
+            self._true_state_of = robot       # microseconds, and the tick asks every time
+            self._true_state = isinstance(robot, TrueState)
+        return self._true_state
 
     def read_sensors(self) -> SensorRecord | None:
         """This period's sample in the description's orders (``None`` if none came).
