@@ -12,6 +12,12 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from wbc.core.package_shadowing import check_not_shadowed
+
+# A user's own tasks.py or sim.py next to their script would break the library with an
+# unrelated ImportError: name the file to rename instead, on the library's first import.
+check_not_shadowed()
+
 if TYPE_CHECKING:  # the same names, for type checkers and editors
     from wbc.backends import available_backends
     from wbc.controller.balance_controller import BalanceController
