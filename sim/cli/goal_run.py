@@ -16,13 +16,16 @@ from actions.go2.go2_actions import HIGH_FIVE_ACTION
 from sim.cli.episode_options import goal_episode
 from sim.cli.exit_codes import EXIT_INTERRUPTED, EXIT_UNAVAILABLE, exit_code
 from sim.cli.output import FeedbackPrinter, metrics_text, plant_line, state_line
+from sim.cli.recording_options import open_recording, recording_summary
 from sim.episode_loop import startup_objects_frozen
 from sim.episode_result import REJECTED, UNAVAILABLE, EpisodeListener, EpisodeResult
 from sim.episode_runner import EpisodeRunner, RenderingUnavailableError
 from sim.run_recorder import write_plot
+from wbc.core.errors import ConfigurationError
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
+    from actions.robot.run_recording import RunRecording
     from sim.episode import Episode
     from sim.episode_result import EpisodeEvent, FeedbackSample
     from sim.viewer import ViewerHook
@@ -50,15 +53,31 @@ class GoalRun(EpisodeListener):
         self.max_error = 0.0
         #: What the report says of the result (``None`` until the goal was answered).
         self.result: dict[str, Any] | None = None
+        #: ``--mcap``/``--foxglove``: the run's channels (every printed line among them).
+        self.recording: RunRecording | None = None
+        self.runner: EpisodeRunner | None = None
 
     def say(self, text: str) -> None:
         """One line of output (replacing the progress line)."""
         self.printer.line(text)
+        if self.recording is not None:
+            now_s = 0.0 if self.runner is None else self.runner.loop.robot.time_s
+            self.recording.line(text, now_s)
 
     def run(self) -> int:
         """Run the goal; return the exit code."""
         args = self.args
+        if getattr(args, "foxglove", None) is not None:
+            args.realtime = True  # a live view at the robot's pace
         episode = goal_episode(args, self.action_name, self.goal)
+        try:
+            self.recording = open_recording(args, control_period_s=episode.control_period_s,
+                                            metadata=self._metadata(episode))
+        except ConfigurationError as err:
+            print(f"go2-wbc: {err}", file=sys.stderr)
+            return EXIT_UNAVAILABLE
+        if self.recording is not None and self.recording.channels.port is not None:
+            self.say(f"foxglove: serving ws://127.0.0.1:{self.recording.channels.port}")
         self.say(state_line(episode))
         self.say(plant_line(episode))
         if episode.state == "estimate":
@@ -72,7 +91,17 @@ class GoalRun(EpisodeListener):
             try:
                 return self._run(runner, episode)
             finally:
+                if self.recording is not None:
+                    self.recording.close()
+                    self.printer.line(recording_summary(args, self.recording))
                 runner.close()  # after the outputs: the window outlives the run
+
+    def _metadata(self, episode: Episode) -> dict[str, str]:
+        """The run's description in the recording (strings)."""
+        return {"command": self.action_name, "goal": self.goal_text, "plant": episode.plant,
+                "state": episode.state, "estimator": episode.estimator,
+                "control_rate_hz": f"{1.0 / episode.control_period_s:g}",
+                "physics_timestep_s": f"{episode.timestep_s:g}"}
 
     def _run(self, runner: EpisodeRunner, episode: Episode) -> int:
         try:
@@ -118,6 +147,11 @@ class GoalRun(EpisodeListener):
     # -- what the runner tells -------------------------------------------------------------
 
     def goal_sending(self, runner: EpisodeRunner, now_s: float) -> None:
+        if self.recording is not None:  # from the goal's sending on, as --log
+            from sim.recording_hook import RecordingHook
+
+            runner.loop.hooks.append(RecordingHook(
+                self.recording, runner.loop, lambda: runner.phase, runner.episode.moving_leg))
         self.say(f"[{now_s:7.3f} s] {self.action_name}: sending goal ({self.goal_text})")
 
     def calibrated(self, report: Any) -> None:
@@ -139,6 +173,8 @@ class GoalRun(EpisodeListener):
             if self.max_error > 0.0:
                 detail = f"largest joint error so far {self.max_error:.4f} rad"
         self.printer.feedback(sample.t_s, sample.phase, sample.progress, detail)
+        if self.recording is not None:
+            self.recording.feedback(sample.phase, sample.progress, sample.t_s)
 
     def event(self, event: EpisodeEvent) -> None:
         if event.push is not None:

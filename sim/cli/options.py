@@ -12,6 +12,7 @@ from typing import Any, NoReturn
 from actions.robot.robot_interface import STATE_SOURCES
 from sim.cli.arg_types import float_in, output_file, push
 from sim.cli.exit_codes import EXIT_USAGE
+from sim.cli.recording_options import add_recording_options
 from sim.cli.settings import GOAL_GROUPS, PUSH_AT_S, PUSH_DIR_DEG, add_settings
 from sim.episode import episode_default
 from sim.plant import PLANT_PRESETS
@@ -107,4 +108,5 @@ def run_options() -> argparse.ArgumentParser:
                           "raised-foot target and position, phase, "
                           "MuJoCo foot contact forces (4x3), CoM margin, QP status, tick time "
                           "(default: none)")
+    add_recording_options(out)
     return common

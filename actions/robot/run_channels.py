@@ -1,0 +1,157 @@
+"""A run's channels in Foxglove's schemas, written to an MCAP file and/or served on a local
+WebSocket: :class:`RunChannels`, the one home of ``foxglove-sdk``.
+
+Typed channels (Foxglove's own schemas, protobuf on the wire): ``/tf`` (FrameTransforms),
+``/joint_states`` (JointStates), ``/markers`` (SceneUpdate), ``/log`` (Log). JSON channels,
+each with a JSON schema: ``/plot``, ``/contacts``, ``/controller/timing``,
+``/action/feedback``, ``/wbc/state`` (the raw arrays a replay reads back) and
+``/robot_description`` (the URDF, schema ``std_msgs/msg/String`` as the 3D panel's URDF layer
+expects, its meshes as ``file://`` URIs on this machine). The MCAP file also holds the URDF as
+an attachment and the run's description as metadata.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import foxglove
+from foxglove.channels import (
+    FrameTransformsChannel,
+    JointStatesChannel,
+    LogChannel,
+    SceneUpdateChannel,
+)
+
+from wbc.core.errors import ConfigurationError
+from wbc.model.description import Go2Description
+
+#: The 3D panel's URDF layer reads a topic of this schema.
+DESCRIPTION_SCHEMA = "std_msgs/msg/String"
+_NUMBER = {"type": "number"}
+_NUMBERS = {"type": "array", "items": _NUMBER}
+#: JSON channel -> (schema name, properties).
+JSON_CHANNELS: dict[str, tuple[str, dict[str, Any]]] = {
+    "/plot": ("go2_wbc.Plot", {
+        "base_height_m": _NUMBER, "base_height_true_m": _NUMBER, "base_speed_mps": _NUMBER,
+        "base_speed_true_mps": _NUMBER, "foot_error_m": _NUMBER, "com_margin_m": _NUMBER}),
+    "/contacts": ("go2_wbc.Contacts", {
+        "legs": {"type": "array", "items": {"type": "string"}},
+        "force_n": {"type": "array", "items": _NUMBERS}, "normal_force_n": _NUMBERS,
+        "estimate_contact": _NUMBERS, "stance": {"type": "array",
+                                                 "items": {"type": "boolean"}}}),
+    "/controller/timing": ("go2_wbc.Timing", {
+        "tick_us": _NUMBER, "qp_ok": {"type": "boolean"}, "status": {"type": "string"},
+        "missed": {"type": "boolean"}, "stages_us": {"type": "object"},
+        "dropped": {"type": "integer"}}),
+    "/action/feedback": ("go2_wbc.ActionFeedback", {
+        "phase": {"type": "string"}, "progress": _NUMBER}),
+    "/wbc/state": ("go2_wbc.State", {
+        "t_s": _NUMBER, "q": _NUMBERS, "v": _NUMBERS, "tau": _NUMBERS, "q_true": _NUMBERS,
+        "v_true": _NUMBERS, "foot_target": {"type": "array", "items": _NUMBERS},
+        "foot_position": {"type": "array", "items": _NUMBERS}, "phase": {"type": "string"},
+        "tick_us": _NUMBER, "qp_ok": {"type": "boolean"}}),
+}
+
+
+def _json_schema(name: str, properties: dict[str, Any]) -> foxglove.Schema:
+    schema = {"type": "object", "title": name, "properties": properties}
+    return foxglove.Schema(name=name, encoding="jsonschema", data=json.dumps(schema).encode())
+
+
+def description_text(description: Go2Description) -> str:
+    """The URDF with its ``package://`` mesh URIs as ``file://`` URIs on this machine (the
+    3D panel of a desktop Foxglove or Lichtblick loads them)."""
+    share = description.package_share_dir.as_uri() + "/"
+    return description.urdf_path.read_text(encoding="utf-8").replace("package://", share)
+
+
+class RunChannels:
+    """The channels of one run, logged to an MCAP file, a WebSocket server, or both.
+
+    Args:
+        mcap_path: The MCAP file to write (replaced if it exists); ``None``: none.
+        port: The local WebSocket port to serve on (127.0.0.1; 0: any free port);
+            ``None``: no server.
+        metadata: The run's description (command, rates, plant, state source), as strings.
+        description: The robot's model (its URDF).
+
+    Raises:
+        ConfigurationError: Neither a file nor a port, or the port cannot be served.
+    """
+
+    def __init__(self, *, mcap_path: Path | str | None = None, port: int | None = None,
+                 metadata: dict[str, str] | None = None,
+                 description: Go2Description | None = None):
+        if mcap_path is None and port is None:
+            raise ConfigurationError("RunChannels: expected an mcap_path, a port or both, "
+                                     "received neither")
+        self.description = description or Go2Description.default()
+        self.context = context = foxglove.Context()
+        self.tf = FrameTransformsChannel("/tf", context=context)
+        self.joints = JointStatesChannel("/joint_states", context=context)
+        self.markers = SceneUpdateChannel("/markers", context=context)
+        self.log = LogChannel("/log", context=context)
+        self.json: dict[str, foxglove.Channel] = {
+            topic: foxglove.Channel(topic, schema=_json_schema(name, properties),
+                                    message_encoding="json", context=context)
+            for topic, (name, properties) in JSON_CHANNELS.items()}
+        self.robot_description = foxglove.Channel(
+            "/robot_description", message_encoding="json", context=context,
+            schema=_json_schema(DESCRIPTION_SCHEMA, {"data": {"type": "string"}}))
+        self.urdf_text = description_text(self.description)
+        self.writer: Any = None
+        self.server: Any = None
+        if mcap_path is not None:
+            self.writer = foxglove.open_mcap(str(mcap_path), allow_overwrite=True,
+                                             context=context)
+            now_ns = time.time_ns()
+            self.writer.attach(log_time=now_ns, create_time=now_ns, name="go2.urdf",
+                               media_type="application/xml",
+                               data=self.description.urdf_path.read_bytes())
+            self.writer.write_metadata("go2-wbc", dict(metadata or {}))
+        if port is not None:
+            try:
+                self.server = foxglove.start_server(
+                    name="go2-wbc", host="127.0.0.1", port=port, context=context,
+                    asset_handler=self._asset)
+            except Exception as err:  # the SDK raises its own types for a busy port
+                if self.writer is not None:
+                    self.writer.close()
+                raise ConfigurationError(f"--foxglove: cannot serve on 127.0.0.1:{port} "
+                                         f"({' '.join(str(err).split())}); give another "
+                                         "port") from err
+
+    @property
+    def port(self) -> int | None:
+        """The WebSocket server's port (``None``: no server)."""
+        return None if self.server is None else int(self.server.port)
+
+    def log_json(self, topic: str, message: dict[str, Any], time_ns: int) -> None:
+        """Log ``message`` on the JSON channel ``topic`` (one of :data:`JSON_CHANNELS`)."""
+        self.json[topic].log(message, log_time=time_ns)
+
+    def log_description(self, time_ns: int) -> None:
+        """The URDF on ``/robot_description`` (repeated: a live view may join late)."""
+        self.robot_description.log({"data": self.urdf_text}, log_time=time_ns)
+
+    def close(self) -> None:
+        """Finish the MCAP file (its summary and indexes) and stop the server."""
+        if self.writer is not None:
+            self.writer.close()
+            self.writer = None
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+    def _asset(self, uri: str) -> bytes | None:
+        """A mesh the live view asks for by ``file://`` or ``package://`` URI."""
+        share = self.description.package_share_dir
+        for prefix, root in (("package://", share), (share.as_uri() + "/", share)):
+            if uri.startswith(prefix):
+                path = (root / uri[len(prefix):]).resolve()
+                if path.is_file() and path.is_relative_to(share.resolve()):
+                    return path.read_bytes()
+        return None

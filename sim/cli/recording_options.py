@@ -1,0 +1,56 @@
+"""``--mcap FILE`` and ``--foxglove [PORT]``: a run's channels recorded to MCAP and served live
+(:mod:`actions.robot.run_channels`), for the simulated commands and ``run --dds``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from actions.robot.run_recording import DEFAULT_RATE_HZ, RunRecording
+from sim.cli.arg_types import output_file, whole_in
+
+#: The port ``--foxglove`` serves on when given without one (Foxglove's default).
+DEFAULT_PORT = 8765
+
+
+def add_recording_options(group: Any) -> None:
+    """``--mcap`` and ``--foxglove``, added to ``group``."""
+    group.add_argument("--mcap", type=output_file(".mcap"), metavar="FILE.mcap",
+                       help="record the run in MCAP for Foxglove or Lichtblick: transforms, "
+                            "joint states, targets and contact forces, plots, timing, the "
+                            f"action's lines and the URDF, at {DEFAULT_RATE_HZ:g} Hz "
+                            "(docs/recording.md; default: none)")
+    group.add_argument("--foxglove", type=whole_in(0, 65535, what="a port"), nargs="?",
+                       const=DEFAULT_PORT, metavar="PORT",
+                       help="serve the same channels live on ws://127.0.0.1:PORT for "
+                            f"Foxglove or Lichtblick (default port {DEFAULT_PORT}; 0: any "
+                            "free port; a simulated run is then paced to the wall clock; "
+                            "default: off)")
+
+
+def open_recording(args: argparse.Namespace, *, control_period_s: float,
+                   metadata: dict[str, str]) -> RunRecording | None:
+    """The recording ``--mcap`` and ``--foxglove`` ask for (``None``: neither).
+
+    Raises:
+        ConfigurationError: The port cannot be served.
+    """
+    mcap, port = getattr(args, "mcap", None), getattr(args, "foxglove", None)
+    if mcap is None and port is None:
+        return None
+    from actions.robot.run_channels import RunChannels
+
+    channels = RunChannels(mcap_path=mcap, port=port, metadata=metadata)
+    return RunRecording(channels, control_period_s=control_period_s)
+
+
+def recording_summary(args: argparse.Namespace, recording: RunRecording) -> str:
+    """What the recording wrote or served, with its dropped snapshots."""
+    where = []
+    if getattr(args, "mcap", None) is not None:
+        where.append(f"wrote {args.mcap}")
+    if recording.channels.port is not None:
+        where.append(f"served ws://127.0.0.1:{recording.channels.port}")
+    return (f"{' and '.join(where)} ({recording.logged} snapshots at "
+            f"{recording.rate_hz:g} Hz, {recording.dropped} dropped)")

@@ -1,0 +1,71 @@
+"""A simulated run into a :class:`~actions.robot.run_recording.RunRecording` (``--mcap``,
+``--foxglove``): :class:`RecordingHook`, a loop hook that adds the simulator's truth.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from actions.robot.run_recording import RunRecording, Snapshot
+from wbc.model.description import LEGS
+from wbc.model.support_polygon import shrunk_signed_distance
+
+if TYPE_CHECKING:
+    from sim.control_loop import ControlLoop
+    from wbc.controller.control_output import ControlOutput
+
+
+class RecordingHook:
+    """Every ``recording.decimation``-th tick: the controller's state and command, the
+    simulator's true state, foot positions and contact forces, the CoM margin, the swing
+    feet's targets; then it logs what is queued (a simulated run has no deadline to keep).
+
+    Args:
+        recording: Where the snapshots go.
+        loop: The simulated loop (its truth now: the state the next tick describes).
+        phase_of: The goal's phase now (its last feedback).
+        leg: The foot the goal moves ("" for none).
+    """
+
+    def __init__(self, recording: RunRecording, loop: ControlLoop,
+                 phase_of: Callable[[], str], leg: str = ""):
+        self.recording = recording
+        self.phase_of = phase_of
+        self.leg = leg
+        self._truth = loop.true_state()
+
+    def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
+        from sim.episode_metrics import LOADED_FORCE_N
+
+        recording = self.recording
+        truth = self._truth
+        self._truth = loop.true_state()  # before physics of the next tick: what it sees
+        if not recording.due():
+            return
+        sim, controller = loop.sim, loop.controller
+        forces = sim.foot_contact_force_array()
+        feet = sim.foot_position_array()
+        loaded = feet[forces[:, 2] > LOADED_FORCE_N]
+        margin = (shrunk_signed_distance(loaded, sim.data.subtree_com[1])
+                  if len(loaded) >= 3 else math.nan)
+        stance = tuple(bool(s) for s in controller.schedule.stance)
+        targets = np.full((len(LEGS), 3), np.nan)
+        for k, leg in enumerate(LEGS):
+            if not stance[k]:
+                target = controller.foot_target(leg)
+                if target is not None:
+                    targets[k] = target
+        estimate = None if loop.estimator is None else loop.estimator.estimate
+        recording.capture(Snapshot(
+            t_s=loop.context.now_s, q=np.array(loop.context.q), v=np.array(loop.context.v),
+            tau=np.array(out.tau), foot_target=targets, stance=stance,
+            tick_us=out.timings.get("total", math.nan) * 1e6, qp_ok=bool(out.ok),
+            status=out.status.name, phase=self.phase_of(),
+            estimate_contact=None if estimate is None else np.array(estimate.contact),
+            q_true=np.array(truth[0]), v_true=np.array(truth[1]), force_n=forces,
+            foot_position=feet, com_margin_m=margin, raised_leg=self.leg))
+        recording.drain()
