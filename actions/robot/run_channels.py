@@ -155,3 +155,44 @@ class RunChannels:
                 if path.is_file() and path.is_relative_to(share.resolve()):
                     return path.read_bytes()
         return None
+
+
+class RelayChannels:
+    """A recording's channels re-served as stored (their schemas and bytes untouched), on a
+    local WebSocket: what ``go2-wbc replay --foxglove`` serves.
+
+    Args:
+        channels: topic -> (schema name, message encoding, schema encoding, schema bytes).
+        port: The local port (0: any free one).
+
+    Raises:
+        ConfigurationError: The port cannot be served.
+    """
+
+    def __init__(self, channels: dict[str, tuple[str, str, str, bytes]], *, port: int):
+        self.context = context = foxglove.Context()
+        self.channels = {
+            topic: foxglove.Channel(topic, message_encoding=encoding, context=context,
+                                    schema=foxglove.Schema(name=name, encoding=schema_encoding,
+                                                           data=data))
+            for topic, (name, encoding, schema_encoding, data) in channels.items()}
+        try:
+            self.server: Any = foxglove.start_server(name="go2-wbc replay", host="127.0.0.1",
+                                                     port=port, context=context)
+        except Exception as err:  # the SDK raises its own types for a busy port
+            raise ConfigurationError(f"--foxglove: cannot serve on 127.0.0.1:{port} "
+                                     f"({' '.join(str(err).split())}); give another "
+                                     "port") from err
+
+    @property
+    def port(self) -> int:
+        """The server's port."""
+        return int(self.server.port)
+
+    def log(self, topic: str, data: bytes, time_ns: int) -> None:
+        """Re-send one stored message."""
+        self.channels[topic].log(data, log_time=time_ns)
+
+    def close(self) -> None:
+        """Stop the server."""
+        self.server.stop()

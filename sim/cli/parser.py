@@ -15,6 +15,7 @@ from sim.cli.check import add_check_command
 from sim.cli.dds_options import add_dds_options
 from sim.cli.exit_codes import EXIT_CODES_HELP
 from sim.cli.options import CliParser, add_plant_options, run_options
+from sim.cli.replay import add_replay_command
 from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
 from sim.cli.settings import add_settings
@@ -37,6 +38,7 @@ examples:
   go2-wbc high-five --set estimator.trust_timeout_s=0.05 --set controller.gains.com_kp=200
   go2-wbc high-five --set help              # every setting, its unit and default
   go2-wbc run --dds; go2-wbc high-five --dds  # a controller on DDS and a goal to it
+  go2-wbc high-five --mcap hf.mcap; go2-wbc replay hf.mcap  # Foxglove/Lichtblick, replay
 
 """
 
@@ -111,4 +113,5 @@ def build_parser() -> argparse.ArgumentParser:
     add_bridge_command(sub)
     add_run_command(sub)
     add_check_command(sub)
+    add_replay_command(sub)
     return parser

@@ -26,6 +26,7 @@ from sim.cli.exit_codes import (
     EXIT_UNAVAILABLE,
     EXIT_USAGE,
 )
+from sim.cli.recording_options import add_recording_options, open_recording, recording_summary
 from sim.cli.settings import add_settings
 from wbc.core.errors import ConfigurationError
 from wbc.estimation.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
@@ -120,6 +121,7 @@ def add_run_command(sub: Any) -> None:
                      help="write per-tick arrays (actions.robot.tick_log: the state tick "
                           "answered, the estimate, status, foot targets, stage times; "
                           "default: none)")
+    add_recording_options(out)
     run.set_defaults(run=run_dds, parser=run)
 
 
@@ -141,10 +143,13 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     from wbc.estimation.estimators import make_estimator
 
     out = stream or sys.stdout
+    recording: Any = None  # --mcap, --foxglove: every line said is among its channels
 
     def say(text: str) -> None:
         out.write(text + "\n")
         out.flush()
+        if recording is not None:
+            recording.line(text, loop.robot.time_s)
 
     period_s = 1.0 / args.control_rate
     params = dict(args.estimator_param)  # --set refused trust_timeout_s: _STALE_SET_BY
@@ -193,6 +198,15 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         if log is not None:
             rt.callbacks.append(log.record)
         rt.callbacks.append(_StatusPrinter(say, dry_run=args.dry_run))
+        recording = open_recording(args, control_period_s=period_s, metadata={
+            "command": "run --dds", "control_rate_hz": str(args.control_rate),
+            "estimator": args.estimator, "dry_run": str(args.dry_run)})
+        if recording is not None:
+            from actions.robot.realtime_recording import RealtimeRecording
+
+            rt.callbacks.append(RealtimeRecording(recording))
+            if recording.channels.port is not None:
+                say(f"foxglove: serving ws://127.0.0.1:{recording.channels.port}")
         calibration = None
         if args.calibrate is not None:
             calibration = CalibrateWhenStanding(args.calibrate, say)
@@ -223,11 +237,17 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         if log is not None:
             log.save(args.log, rt)
             say(f"log: {args.log} ({len(log)} ticks)")
+        if recording is not None:
+            recording.close()
+            out.write(recording_summary(args, recording) + "\n")
+            recording = None
         return EXIT_INTERRUPTED if rt.rest.stop_reason.startswith("SIG") else EXIT_SUCCEEDED
     except ConfigurationError as err:
         print(f"go2-wbc: error: {err}", file=sys.stderr)
         return EXIT_USAGE
     finally:
+        if recording is not None:  # an error mid-run: the file still gets its summary
+            recording.close()
         if bridge is not None:
             bridge.close()
         if robot is not None:

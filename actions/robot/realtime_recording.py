@@ -1,0 +1,80 @@
+"""A wall-clock run (``go2-wbc run --dds``) into a
+:class:`~actions.robot.run_recording.RunRecording`: :class:`RealtimeRecording`, a
+:class:`~actions.robot.realtime_loop.RealtimeLoop` callback.
+
+The tick only copies its snapshot; the messages are logged in the time left before the next
+deadline (after the command is written), when the next one is expected to fit with
+:data:`IDLE_MARGIN_S` to spare. A snapshot that does not fit waits in the queue; a full queue
+drops new ones (counted).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from actions.robot.run_recording import RunRecording, Snapshot
+from actions.robot.tick_log import FootTargets
+from actions.robot.tick_stats import SERIES
+from wbc.model.description import LEGS
+
+if TYPE_CHECKING:
+    from actions.robot.realtime_loop import RealtimeLoop
+
+#: Time [s] left untouched before the next deadline (the garbage collector's, the wake-up's).
+IDLE_MARGIN_S = 2e-4
+_TICK = SERIES.index("tick")
+
+
+class RealtimeRecording:
+    """Snapshots a wall-clock loop's ticks every ``recording.decimation`` ticks, logs them in
+    idle time.
+
+    Args:
+        recording: Where the snapshots go.
+    """
+
+    def __init__(self, recording: RunRecording):
+        self.recording = recording
+        self._targets: FootTargets | None = None
+        self._declared = False
+
+    def __call__(self, rt: RealtimeLoop) -> None:
+        recording = self.recording
+        if recording.due():
+            self._capture(rt)
+        recording.drain(rt.deadlines.time_left_s() - IDLE_MARGIN_S)
+
+    def _capture(self, rt: RealtimeLoop) -> None:
+        loop = rt.loop
+        controller = loop.controller
+        if not self._declared:  # once: an isinstance on a protocol costs microseconds
+            self._declared = True
+            self._targets = controller if isinstance(controller, FootTargets) else None
+        stance = tuple(bool(s) for s in controller.schedule.stance)
+        targets = np.full((len(LEGS), 3), np.nan)
+        if self._targets is not None:
+            for k, leg in enumerate(LEGS):
+                if not stance[k]:
+                    target = self._targets.foot_target(leg)
+                    if target is not None:
+                        targets[k] = target
+        out = rt.last_output
+        times = rt.last_times  # the previous tick's, complete
+        estimator = loop.estimator
+        goals = loop.runner.active_goals()
+        self.recording.capture(Snapshot(
+            t_s=loop.context.now_s, q=np.array(loop.context.q), v=np.array(loop.context.v),
+            tau=np.full(12, np.nan) if out is None else np.array(out.tau),
+            foot_target=targets, stance=stance,
+            tick_us=float(times[_TICK]) * 1e6, qp_ok=out is not None and bool(out.ok),
+            status="DAMPING" if out is None else out.status.name,
+            phase=(goals[0].server.action_name if goals else rt.rest.phase.name.lower()),
+            estimate_contact=None if estimator is None
+            else np.array(estimator.estimate.contact),
+            missed=rt.missed,
+            stages_us={name: round(float(t) * 1e6, 1) for name, t in zip(SERIES, times,
+                                                                          strict=True)
+                       if math.isfinite(t)}))
