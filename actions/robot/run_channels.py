@@ -77,6 +77,8 @@ class RunChannels:
             ``None``: no server.
         metadata: The run's description (command, rates, plant, state source), as strings.
         description: The robot's model (its URDF).
+        server_listener: Told of the live clients' subscriptions (a
+            ``foxglove.websocket.ServerListener``; none by default).
 
     Raises:
         ConfigurationError: Neither a file nor a port, or the port cannot be served.
@@ -84,7 +86,7 @@ class RunChannels:
 
     def __init__(self, *, mcap_path: Path | str | None = None, port: int | None = None,
                  metadata: dict[str, str] | None = None,
-                 description: Go2Description | None = None):
+                 description: Go2Description | None = None, server_listener: Any = None):
         if mcap_path is None and port is None:
             raise ConfigurationError("RunChannels: expected an mcap_path, a port or both, "
                                      "received neither")
@@ -116,7 +118,7 @@ class RunChannels:
             try:
                 self.server = foxglove.start_server(
                     name="go2-wbc", host="127.0.0.1", port=port, context=context,
-                    asset_handler=self._asset)
+                    asset_handler=self._asset, server_listener=server_listener)
             except Exception as err:  # the SDK raises its own types for a busy port
                 if self.writer is not None:
                     self.writer.close()

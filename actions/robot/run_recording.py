@@ -48,6 +48,8 @@ DEFAULT_RATE_HZ = 50.0
 QUEUE_SNAPSHOTS = 512
 #: Seconds of robot time between repeats of the URDF on ``/robot_description``.
 DESCRIPTION_PERIOD_S = 1.0
+#: Factor on a step's expected time each time it did not fit (so an outlier fades).
+SKIP_DECAY = 0.95
 #: Log levels by name.
 LEVELS = {"info": LogLevel.Info, "warning": LogLevel.Warning, "error": LogLevel.Error}
 _IDENTITY = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
@@ -98,8 +100,9 @@ def _array(a: np.ndarray | None) -> list | None:
     """An array as JSON lists, to the micrometre or microradian; NaN as ``None``."""
     if a is None:
         return None
-    a = np.asarray(a, dtype=float)
-    return np.where(np.isfinite(a), a.round(6), None).tolist()
+    a = np.asarray(a, dtype=float).round(6)
+    finite = np.isfinite(a)
+    return a.tolist() if finite.all() else np.where(finite, a, None).tolist()
 
 
 def _arrow_rotation(direction: np.ndarray) -> Quaternion:
@@ -137,13 +140,19 @@ class RunRecording:
         self.decimation = max(1, round(control_hz / rate_hz))
         self.rate_hz = control_hz / self.decimation
         self.frames = JointFrames(channels.description.urdf_path)
+        self._parents, self._children = self.frames.parents, self.frames.children
+        self._origins = [Vector3(x=x, y=y, z=z) for x, y, z in self.frames.origin_xyz.tolist()]
         self._queue: deque[Snapshot] = deque()
         self._queue_size = queue_size
         self._ticks = 0
         #: Snapshots taken, logged, and dropped because the queue was full.
         self.taken = self.logged = self.dropped = 0
-        #: The longest [s] one snapshot took to log, decaying (what :meth:`drain` expects).
-        self.expected_s = 0.0
+        #: A snapshot's messages in steps, and each step's expected time [s] (its longest
+        #: recent one, decaying): what :meth:`drain` fits in the time it is given.
+        self._steps = (self._log_transforms, self._log_joints, self._log_markers,
+                       self._log_plots, self._log_state)
+        self._expected_s = [0.0] * len(self._steps)
+        self._step = 0
         self._next_description_s = -math.inf
 
     def due(self) -> bool:
@@ -161,18 +170,27 @@ class RunRecording:
         self._queue.append(snapshot)
 
     def drain(self, time_left_s: float = math.inf, *, clock=time.perf_counter) -> int:
-        """Log queued snapshots while the next is expected to fit in ``time_left_s`` [s];
-        returns how many were logged."""
+        """Log queued snapshots, a step (a channel's message or two) at a time, while the
+        next step is expected to fit in ``time_left_s`` [s]; returns the snapshots finished.
+
+        Each step's expected time is its longest recent one, decaying; a step that does not
+        fit decays it faster (:data:`SKIP_DECAY`), so an outlier never blocks the queue.
+        """
         done = 0
         start = clock()
+        steps, expected = self._steps, self._expected_s
         while self._queue:
-            if clock() - start + self.expected_s > time_left_s:
+            k = self._step
+            if clock() - start + expected[k] > time_left_s:
+                expected[k] *= SKIP_DECAY
                 break
             t0 = clock()
-            self._log(self._queue.popleft())
-            took = clock() - t0
-            self.expected_s = max(took, 0.99 * self.expected_s)
-            done += 1
+            steps[k](self._queue[0])
+            expected[k] = max(clock() - t0, 0.99 * expected[k])
+            self._step = (k + 1) % len(steps)
+            if self._step == 0:
+                self._queue.popleft()
+                done += 1
         self.logged += done
         return done
 
@@ -194,20 +212,24 @@ class RunRecording:
 
     # -- the messages --------------------------------------------------------------------
 
-    def _log(self, s: Snapshot) -> None:
+    def _log_transforms(self, s: Snapshot) -> None:
         ns = round(s.t_s * 1e9)
-        stamp = _stamp(ns)
         ch = self.channels
         if s.t_s >= self._next_description_s:
             ch.log_description(ns)
             self._next_description_s = s.t_s + DESCRIPTION_PERIOD_S
-        ch.tf.log(FrameTransforms(transforms=self._transforms(s, stamp)), log_time=ns)
-        ch.joints.log(JointStates(timestamp=stamp, joints=[
-            JointState(name=name, position=float(s.q[7 + k]), velocity=float(s.v[6 + k]),
-                       effort=float(s.tau[k])) for k, name in enumerate(JOINT_NAMES)]),
-            log_time=ns)
-        ch.markers.log(self._markers(s, stamp), log_time=ns)
-        self._log_json(s, ns)
+        ch.tf.log(FrameTransforms(transforms=self._transforms(s, _stamp(ns))), log_time=ns)
+
+    def _log_joints(self, s: Snapshot) -> None:
+        ns = round(s.t_s * 1e9)
+        q, v, tau = s.q[7:].tolist(), s.v[6:].tolist(), s.tau.tolist()
+        self.channels.joints.log(JointStates(timestamp=_stamp(ns), joints=[
+            JointState(name=name, position=q[k], velocity=v[k], effort=tau[k])
+            for k, name in enumerate(JOINT_NAMES)]), log_time=ns)
+
+    def _log_markers(self, s: Snapshot) -> None:
+        ns = round(s.t_s * 1e9)
+        self.channels.markers.log(self._markers(s, _stamp(ns)), log_time=ns)
 
     def _transforms(self, s: Snapshot, stamp: Timestamp) -> list[FrameTransform]:
         """world -> base (the estimate), world -> base_true (the truth), each joint's."""
@@ -215,15 +237,13 @@ class RunRecording:
         out = [FrameTransform(timestamp=stamp, parent_frame_id="world", child_frame_id=child,
                               translation=Vector3(x=q[0], y=q[1], z=q[2]),
                               rotation=Quaternion(x=q[3], y=q[4], z=q[5], w=q[6]))
-               for child, q in bases]
-        frames = self.frames
-        rotations = frames.rotations(s.q[7:])
-        for k in range(len(JOINT_NAMES)):
-            t, r = frames.origin_xyz[k], rotations[k]
+               for child, q in ((c, q[:7].tolist()) for c, q in bases)]
+        rotations = self.frames.rotations(s.q[7:]).tolist()
+        for parent, child, t, r in zip(self._parents, self._children, self._origins,
+                                       rotations, strict=True):
             out.append(FrameTransform(
-                timestamp=stamp, parent_frame_id=frames.parents[k],
-                child_frame_id=frames.children[k], translation=Vector3(x=t[0], y=t[1], z=t[2]),
-                rotation=Quaternion(x=r[0], y=r[1], z=r[2], w=r[3])))
+                timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
+                translation=t, rotation=Quaternion(x=r[0], y=r[1], z=r[2], w=r[3])))
         return out
 
     def _markers(self, s: Snapshot, stamp: Timestamp) -> SceneUpdate:
@@ -253,7 +273,9 @@ class RunRecording:
             timestamp=stamp, frame_id="world", id="wbc", spheres=spheres, arrows=arrows,
             lines=lines)])
 
-    def _log_json(self, s: Snapshot, ns: int) -> None:
+    def _log_plots(self, s: Snapshot) -> None:
+        """``/plot``, ``/contacts``, ``/controller/timing``."""
+        ns = round(s.t_s * 1e9)
         ch = self.channels
         foot_error = math.nan
         if s.raised_leg and s.foot_position is not None:
@@ -272,7 +294,11 @@ class RunRecording:
         ch.log_json("/controller/timing", {
             "tick_us": _finite(s.tick_us), "qp_ok": s.qp_ok, "status": s.status,
             "missed": s.missed, "stages_us": s.stages_us, "dropped": self.dropped}, ns)
-        ch.log_json("/wbc/state", {
+
+    def _log_state(self, s: Snapshot) -> None:
+        """``/wbc/state``: the arrays a replay reads back."""
+        ns = round(s.t_s * 1e9)
+        self.channels.log_json("/wbc/state", {
             "t_s": s.t_s, "q": _array(s.q), "v": _array(s.v), "tau": _array(s.tau),
             "q_true": _array(s.q_true), "v_true": _array(s.v_true),
             "foot_target": _array(s.foot_target), "foot_position": _array(s.foot_position),
