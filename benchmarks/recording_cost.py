@@ -24,7 +24,7 @@ from benchmarks.dds_outputs import ControllerFigures
 from benchmarks.dds_processes import CONTROLLER_READY, DdsProcesses, private_domain_id
 
 MODES = ("none", "mcap", "foxglove")
-SUBPROTOCOL = "foxglove.websocket.v1"
+SUBPROTOCOL = "foxglove.sdk.v1"  # foxglove-sdk 0.30 refuses "foxglove.websocket.v1"
 #: Longest wait [s] for the controller to control (start-up on a loaded machine).
 START_S = 180.0
 
@@ -44,7 +44,7 @@ class Subscriber(threading.Thread):
         super().__init__(daemon=True)
         self.port = port
         self.counts: dict[str, int] = {}
-        self._stop = threading.Event()
+        self._done = threading.Event()
         self.error: BaseException | None = None
 
     def run(self) -> None:
@@ -54,7 +54,7 @@ class Subscriber(threading.Thread):
             self.error = err
 
     def stop(self) -> None:
-        self._stop.set()
+        self._done.set()
         self.join(10.0)
 
     async def _main(self) -> None:
@@ -72,7 +72,7 @@ class Subscriber(threading.Thread):
                 await asyncio.sleep(0.1)
         topics: dict[int, str] = {}
         async with ws:
-            while not self._stop.is_set():
+            while not self._done.is_set():
                 try:
                     frame = await asyncio.wait_for(ws.recv(), 0.2)
                 except TimeoutError:

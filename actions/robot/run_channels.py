@@ -106,6 +106,7 @@ class RunChannels:
         self.urdf_text = description_text(self.description)
         self.writer: Any = None
         self.server: Any = None
+        self._port: int | None = None
         if mcap_path is not None:
             self.writer = foxglove.open_mcap(str(mcap_path), allow_overwrite=True,
                                              context=context)
@@ -125,11 +126,12 @@ class RunChannels:
                 raise ConfigurationError(f"--foxglove: cannot serve on 127.0.0.1:{port} "
                                          f"({' '.join(str(err).split())}); give another "
                                          "port") from err
+            self._port = int(self.server.port)
 
     @property
     def port(self) -> int | None:
-        """The WebSocket server's port (``None``: no server)."""
-        return None if self.server is None else int(self.server.port)
+        """The WebSocket server's port, also once closed (``None``: no server)."""
+        return self._port
 
     def log_json(self, topic: str, message: dict[str, Any], time_ns: int) -> None:
         """Log ``message`` on the JSON channel ``topic`` (one of :data:`JSON_CHANNELS`)."""
