@@ -295,6 +295,8 @@ class SimulatedSensors:
         self._last_s = self.sim.time_s
         self._noise = np.zeros((_NOISE_BLOCK, _CHANNELS))  # the exact model's stays zero
         self._row = _NOISE_BLOCK  # used up: the first sample refills
+        # Judged once here: comparing the model with the exact preset costs tens of us.
+        self._exact = m.is_exact
         self.ticks = 0
 
     def _settled_attitude(self) -> np.ndarray:
@@ -329,7 +331,7 @@ class SimulatedSensors:
         if now < self._last_s:  # the simulator was reset
             self.reset()
         if self._row == _NOISE_BLOCK:
-            if not self.model.is_exact:
+            if not self._exact:
                 self._rng.standard_normal(out=self._noise)
             self._row = 0
         self._compiled(

@@ -96,8 +96,10 @@ class ContactSchedule:
     def support_legs(self) -> list[str]:
         """Stance feet that are fully loaded: the corners of the support polygon."""
         full = self.settings.max_normal_force_n
-        return [c for c, s, b in zip(self.contacts, self._stance, self._bounds)
-                if s and b >= full]
+        # Python's bools and floats: iterating the arrays made a NumPy scalar of each entry
+        # (about 1.5 us a call, and the balance watch calls it every tick).
+        return [c for c, s, b in zip(self.contacts, self._stance.tolist(),
+                                     self._bounds.tolist()) if s and b >= full]
 
     def normal_force_bounds(self, out: np.ndarray) -> np.ndarray:
         """Each foot's normal-force bound [N] into ``out`` (contacts,), 0 in swing: what a
