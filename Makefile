@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: install demo test test-slow bench bench-full docs lint
+.PHONY: install demo test test-slow install-ros2 test-ros2 bench bench-full docs lint
 
 $(STAMP): pyproject.toml scripts/setup.sh
 	PYTHON=$(PYTHON) bash scripts/setup.sh
@@ -21,10 +21,24 @@ demo: $(STAMP)
 # the rest: the sweeps' other values, the multi-process and packaging checks, and the tests
 # listed in tests/slow_stage.txt. The README's Tests section says what each holds and how long.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -m "not slow and not ros2"
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -m "slow and not ros2"
+
+# ROS 2 (docs/ros2.md): the ros2 extra's wheels into the same venv, then the interface packages
+# (go2_interfaces, control_msgs) generated with rosidl into it (cached by the sources' hash),
+# then the tests that need them (CI's third stage, after the two above ran without rclpy).
+ROS2_STAMP := $(VENV)/.ros2-installed-stamp
+$(ROS2_STAMP): $(STAMP) pyproject.toml
+	$(BIN)/python -m pip install -q -e '.[test,scale,ros2]'
+	touch $(ROS2_STAMP)
+
+install-ros2: $(ROS2_STAMP)
+	$(BIN)/python -m go2_ros2.interface_build
+
+test-ros2: install-ros2
+	$(BIN)/python -m pytest -q -m ros2 tests/ros2
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks.qp_timing --quick

@@ -28,10 +28,11 @@ FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("the GO2's behaviours", ("actions.go2",)),
     ("the robot loop", ("actions.robot",)),
     ("the simulator", ("sim",)),
+    ("ROS 2 (the ros2 extra: the one home of rclpy)", ("go2_ros2",)),
     ("the command line", ("sim.cli",)),
     ("benchmarks", ("benchmarks",)),
 )
-PACKAGES = ("wbc", "tasks", "actions", "sim", "benchmarks")
+PACKAGES = ("wbc", "tasks", "actions", "sim", "benchmarks", "go2_ros2")
 #: Package ``__init__`` modules that re-export names for users.
 FACADES = ("wbc", "tasks", "actions", "actions.robot", "wbc.backends")
 #: Packages inside which an import cycle is tolerated for now: the QP backend registry
