@@ -108,5 +108,5 @@ def run_options() -> argparse.ArgumentParser:
                           "raised-foot target and position, phase, "
                           "MuJoCo foot contact forces (4x3), CoM margin, QP status, tick time "
                           "(default: none)")
-    add_recording_options(out)
+    add_recording_options(out, listed=False)  # said in the epilog (RECORDING_HELP)
     return common

@@ -15,6 +15,7 @@ from sim.cli.check import add_check_command
 from sim.cli.dds_options import add_dds_options
 from sim.cli.exit_codes import EXIT_CODES_HELP
 from sim.cli.options import CliParser, add_plant_options, run_options
+from sim.cli.recording_options import RECORDING_HELP
 from sim.cli.replay import add_replay_command
 from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
@@ -56,7 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     def add(name: str, help_text: str, epilog: str = "") -> argparse.ArgumentParser:
         command = sub.add_parser(name, parents=[common], help=help_text,
-                                 description=help_text, epilog=epilog + EXIT_CODES_HELP,
+                                 description=help_text,
+                                 epilog=epilog + RECORDING_HELP + EXIT_CODES_HELP,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
         command.set_defaults(parser=command)
         return command

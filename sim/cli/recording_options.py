@@ -14,19 +14,35 @@ from sim.cli.arg_types import output_file, whole_in
 DEFAULT_PORT = 8765
 
 
-def add_recording_options(group: Any) -> None:
-    """``--mcap`` and ``--foxglove``, added to ``group``."""
+#: What a goal command's help says of them (its option list stays at 20 lines).
+RECORDING_HELP = """\
+recording (docs/recording.md):
+  --mcap FILE.mcap   record the run for Foxglove or Lichtblick (transforms, joint states,
+                     targets, contact forces, plots, timing, the printed lines, the URDF)
+  --foxglove [PORT]  serve the same channels live on ws://127.0.0.1:PORT (default 8765;
+                     0: any free port); the run is then paced to the wall clock
+  go2-wbc replay FILE.mcap plays a recording back (viewer, --foxglove, --plot)
+
+"""
+
+
+def add_recording_options(group: Any, *, listed: bool = True) -> None:
+    """``--mcap`` and ``--foxglove``, added to ``group``; ``listed=False``: left out of the
+    option list (the goal commands' help says them in :data:`RECORDING_HELP`)."""
+    def said(text: str) -> str:
+        return text if listed else argparse.SUPPRESS
+
     group.add_argument("--mcap", type=output_file(".mcap"), metavar="FILE.mcap",
-                       help="record the run in MCAP for Foxglove or Lichtblick: transforms, "
+                       help=said("record the run in MCAP for Foxglove or Lichtblick: transforms, "
                             "joint states, targets and contact forces, plots, timing, the "
                             f"action's lines and the URDF, at {DEFAULT_RATE_HZ:g} Hz "
-                            "(docs/recording.md; default: none)")
+                            "(docs/recording.md; default: none)"))
     group.add_argument("--foxglove", type=whole_in(0, 65535, what="a port"), nargs="?",
                        const=DEFAULT_PORT, metavar="PORT",
-                       help="serve the same channels live on ws://127.0.0.1:PORT for "
+                       help=said("serve the same channels live on ws://127.0.0.1:PORT for "
                             f"Foxglove or Lichtblick (default port {DEFAULT_PORT}; 0: any "
                             "free port; a simulated run is then paced to the wall clock; "
-                            "default: off)")
+                            "default: off)"))
 
 
 def open_recording(args: argparse.Namespace, *, control_period_s: float,
