@@ -17,6 +17,7 @@ from sim.cli.exit_codes import EXIT_CODES_HELP
 from sim.cli.options import CliParser, add_plant_options, run_options
 from sim.cli.recording_options import RECORDING_HELP
 from sim.cli.replay import add_replay_command
+from sim.cli.ros2_command import add_ros2_commands
 from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
 from sim.cli.settings import add_settings
@@ -116,4 +117,5 @@ def build_parser() -> argparse.ArgumentParser:
     add_run_command(sub)
     add_check_command(sub)
     add_replay_command(sub)
+    add_ros2_commands(sub)  # after run and send-goal: it adds --ros2 to them
     return parser

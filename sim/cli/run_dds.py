@@ -27,6 +27,7 @@ from sim.cli.exit_codes import (
     EXIT_USAGE,
 )
 from sim.cli.recording_options import add_recording_options, open_recording, recording_summary
+from sim.cli.ros2_command import start_ros2_node
 from sim.cli.settings import add_settings
 from wbc.core.errors import ConfigurationError
 from wbc.estimation.estimators import DEFAULT_ESTIMATOR, ESTIMATORS
@@ -158,7 +159,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             dict(args.controller_param))
     except ConfigurationError as err:
         args.parser.error(f"--set controller.{err}")
-    robot = bridge = None
+    robot = bridge = ros_node = None
     try:
         try:
             make_estimator(args.estimator, control_period_s=period_s, **params)
@@ -190,6 +191,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         loop = ControlLoop(robot, WholeBodyController(config),
                            estimator=estimator)
         bridge = DdsActionBridge(loop, domain_id=args.domain, interface=args.interface)
+        ros_node = start_ros2_node(args, loop, say)  # --ros2: the same actions on ROS 2
         rt = RealtimeLoop(loop, rate_hz=args.control_rate, bridge=bridge,
                           stale_after_s=stale_after_s,
                           align_s=0.0 if args.no_align else None,
@@ -248,6 +250,8 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     finally:
         if recording is not None:  # an error mid-run: the file still gets its summary
             recording.close()
+        if ros_node is not None:
+            ros_node.close()
         if bridge is not None:
             bridge.close()
         if robot is not None:
