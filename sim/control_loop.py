@@ -5,6 +5,7 @@ which builds the MuJoCo plant, its sensors and the default controller around the
 from __future__ import annotations
 
 from collections.abc import Sequence
+from numbers import Integral
 from typing import Protocol, runtime_checkable
 
 from actions.action_runner import BusyPolicy
@@ -12,7 +13,7 @@ from actions.robot.control_loop import ControlLoop as Go2Loop
 from actions.robot.control_loop import TickHook
 from actions.robot.robot_interface import STATE_SOURCES, RobotInterface
 from sim.disturbances import DelayedRobot
-from sim.mujoco_robot import MujocoRobot
+from sim.mujoco_robot import MujocoRobot, physics_steps_per_period
 from sim.plant import DEFAULT_PLANT, Plant
 from sim.sensor_faults import FaultyRobot, SensorFault
 from sim.sensors import DEFAULT_SENSORS, SensorModel
@@ -20,7 +21,7 @@ from sim.simulator import Go2Simulator
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.whole_body_controller import WholeBodyController
 from wbc.core.errors import ConfigurationError
-from wbc.core.validation import check_name
+from wbc.core.validation import check_name, is_finite_real
 from wbc.estimation.state_estimator import EstimatorBase
 
 __all__ = ["PHYSICS_TIMESTEP_S", "ControlLoop", "SimulatedLoop", "TickHook"]
@@ -88,11 +89,21 @@ class ControlLoop(Go2Loop):
                 or a controller configured for another period.
             UnknownNameError: An unknown sensor preset or state source.
         """
+        # Named here: the plant would otherwise round a period of 1.5 ms to 2 physics steps.
+        if not is_finite_real(control_period_s) or not 0 < control_period_s <= 0.1:
+            raise ConfigurationError(f"control_period_s: expected a number in (0, 0.1] s, a "
+                                     f"whole number of physics steps, received "
+                                     f"{control_period_s!r}")
+        if (isinstance(sensor_seed, bool) or not isinstance(sensor_seed, Integral)
+                or sensor_seed < 0):
+            raise ConfigurationError(f"sensor_seed: expected a whole number >= 0 (the seed of "
+                                     f"the sensors' noise and biases), received {sensor_seed!r}")
         if physics_timestep_s is None:
             physics_timestep_s = min(PHYSICS_TIMESTEP_S, control_period_s)
         check_name("state source", state, STATE_SOURCES)
         sim = Go2Simulator(actuator_order=actuator_order, plant=plant,
                            timestep_s=physics_timestep_s)
+        physics_steps_per_period(control_period_s, sim.timestep_s)  # 1.5 ms on 1 ms: refused
         plant_robot = MujocoRobot(sim, control_period_s=control_period_s, sensors=sensors,
                                   sensor_seed=sensor_seed)
         robot: RobotInterface = plant_robot

@@ -132,7 +132,8 @@ _RANGES = {
 }
 
 #: The named sensor models. ``go2`` (the default): the GO2's sensors as far as public
-#: sources tell, the rest assumed from its class of hardware (README "Sensors" table):
+#: sources tell, the rest assumed from its class of hardware (docs/state-estimation.md,
+#: "The simulated sensors"):
 #: gyroscope and accelerometer noise of a BMI088-class MEMS IMU read at about 230 Hz
 #: bandwidth (0.014 deg/s/sqrt(Hz) -> 0.004 rad/s; 175 ug/sqrt(Hz) -> 0.03 m/s^2), bias
 #: walks as go2_odometry's InEKF assumes for a GO2 (1e-5, 1e-4), starting biases left by a

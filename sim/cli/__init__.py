@@ -30,6 +30,7 @@ from sim.cli.parser import build_parser
 from sim.cli.send_goal import SendGoal
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
 from sim.episode_loop import startup_objects_frozen
+from sim.kernel_cache import notice_if_cold
 
 __all__ = [
     "EXIT_CODES_HELP", "EXIT_INTERRUPTED", "EXIT_NOT_SUCCEEDED", "EXIT_REJECTED",
@@ -47,6 +48,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_dds_options(args)
         if hasattr(args, "plant") and not getattr(args, "dds", False):  # they simulate
             check_options(args)
+        if args.command == "run" or (hasattr(args, "plant") and not getattr(args, "dds", False)):
+            notice_if_cold(sys.stderr)  # a first run compiles for a minute: say so first
         if getattr(args, "dds", False) and hasattr(args, "dds_run"):  # a goal over DDS
             return int(args.dds_run(args))
         return int(args.run(args))

@@ -7,7 +7,7 @@ from typing import Any
 
 from sim.cli.options import PUSH_AT_S, PUSH_DIR_DEG
 from sim.disturbances import Push
-from sim.episode import Episode, EpisodeError
+from sim.episode import Episode, EpisodeError, episode_default
 from sim.episode_runner import VIDEO_FPS, VIDEO_SIZE
 from sim.scene_overlay import DEFAULT_OVERLAYS
 from sim.video_recorder import choose_offscreen_gl
@@ -71,11 +71,35 @@ def _named(args: argparse.Namespace, dest: str) -> str:
     return f"--set {path}" if path else f"--{dest.replace('_', '-')}"
 
 
+def _refuse_unused_with_truth(args: argparse.Namespace) -> None:
+    """With ``--state truth`` no estimator runs and no sensor is read: an option that changes
+    them would be ignored without a word, so it is a usage error naming it (as the Python API
+    refuses an estimator with ``state='truth'``)."""
+    if args.state != "truth":
+        args.estimator = args.estimator or episode_default("estimator")
+        return
+    why = ("not used with --state truth (the controller reads the simulator's exact state: "
+           "no estimator runs, no sensor is read); drop it, or use --state estimate")
+    if args.estimator is not None:
+        args.parser.error(f"--estimator {args.estimator}: {why}")
+    if args.estimator_param:
+        name, value = args.estimator_param[0]
+        args.parser.error(f"--set estimator.{name}={value}: {why}")
+    if args.sensor_fault:
+        fault = args.sensor_fault[0]
+        text = ",".join([fault.kind, f"{fault.at_s:g}", f"{fault.duration_s:g}",
+                         *([fault.name] if fault.name else [])])
+        named = _named(args, "sensor_fault")
+        args.parser.error(f"{named}{'=' if named.startswith('--set') else ' '}{text}: {why}")
+    args.estimator = episode_default("estimator")
+
+
 def _episode(args: argparse.Namespace) -> Episode:
     fields: dict[str, Any] = {
         "action": None, "plant": args.plant, "plant_params": args.plant_param,
         "control_period_s": 1.0 / args.control_rate, "physics_timestep_s": args.physics_dt}
     if hasattr(args, "state"):
+        _refuse_unused_with_truth(args)
         fields.update(sensors=args.sensors, sensor_params=args.sensor_param,
                       sensor_seed=args.sensor_seed, state=args.state, estimator=args.estimator,
                       estimator_params=args.estimator_param,

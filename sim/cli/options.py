@@ -50,7 +50,8 @@ def add_state_options(group: Any) -> None:
                             "on the simulated sensors, as on a real GO2) or 'truth' (the "
                             "simulator's exact state, for comparison)")
     estimator = episode_default("estimator")
-    group.add_argument("--estimator", choices=tuple(ESTIMATORS), default=estimator,
+    # default None: given with --state truth, it is refused (sim.cli.episode_options)
+    group.add_argument("--estimator", choices=tuple(ESTIMATORS), default=None,
                        help="the state estimator: " + "; ".join(
                            f"'{name}': {what}" for name, what in ESTIMATORS.items())
                        + f" (default: {estimator}; its parameters: --set estimator.NAME=VALUE)")

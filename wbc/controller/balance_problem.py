@@ -24,6 +24,7 @@ from wbc.controller.controller_config import ControllerConfig
 from wbc.controller.problem_builder import ProblemBuilder
 from wbc.controller.tick_plan import Regularization
 from wbc.core.compiled_call import bind_compiled
+from wbc.core.errors import ConfigurationError
 from wbc.model.description import Go2Description
 from wbc.model.kinematics import RobotKinematics
 from wbc.model.support_polygon import SupportPolygon
@@ -128,6 +129,7 @@ class BalanceProblem:
             self.builder.add_constraint(constraint)
         self._foot_rows = {leg: i for i, leg in enumerate(self.legs)}
         self._support: tuple[str, ...] | None = None
+        self._held = False  # no target before the first hold (the controller's reset)
         #: Each foot's mode as last followed (:meth:`follow`), and the feet in the air.
         self.stance: list[bool] = []
         self.swing_legs: list[str] = []
@@ -148,6 +150,7 @@ class BalanceProblem:
         base level at its yaw, the joints, the feet; unit posture weights, the feet's
         configured weight."""
         kin = self.kinematics
+        self._held = True
         self.com_task.set_target(kin.com_position)
         yaw = pin.rpy.matrixToRpy(kin.base_rotation)[2]
         self.base_task.set_rpy(0.0, 0.0, yaw)
@@ -208,6 +211,9 @@ class BalanceProblem:
     def before_update(self) -> None:
         """Per-tick inputs that depend on the state: the polygon (when the support changed)
         and the base orientation's integral."""
+        if not self._held:  # the tasks would say "target not set", not how to fix it
+            raise ConfigurationError("WholeBodyController.step() before reset(): call "
+                                     "controller.reset(q, v) first, with the robot's state")
         if self._polygon_due and self._support is not None:
             self._polygon_due = False
             legs = self._support

@@ -8,8 +8,8 @@ choose from.
   from the IMU's attitude filter and a linear Kalman filter on the legs' kinematics (MIT
   Cheetah's, legged_control's).
 
-Chosen by measurement (``python -m benchmarks.estimator``, the README's "State estimation"
-section): the invariant EKF's velocity error is a quarter of the linear filter's (0.5
+Chosen by measurement (``python -m benchmarks.estimator``, docs/state-estimation.md,
+"The estimators"): the invariant EKF's velocity error is a quarter of the linear filter's (0.5
 against 2.0 mm/s RMS on the high five, 44 against 432 mm/s at worst through pushes), its
 roll and pitch are its own rather than the IMU filter's (0.08 against 0.19 deg at most),
 and its tick costs 2 us more (6.4 against 4.4 us median), within the 10 us budget.

@@ -37,7 +37,7 @@ one value, a foot sensor at full scale, foot forces that contradict the weight. 
 estimate reports what it distrusts (:attr:`StateEstimate.faults`), goes on with the rest,
 and says when it has had no trustworthy sample for longer than ``trust_timeout_s``
 (:attr:`StateEstimate.usable`): the control loop then sends the controller's safe command.
-The README's "What it measures" section has the measurements behind the choices (this
+docs/state-estimation.md, "The estimators", has the measurements behind the choices (this
 filter against the contact-aided invariant EKF, :class:`wbc.InvariantEkf`, the default).
 """
 
