@@ -294,6 +294,7 @@ class SimulatedSensors:
         self._has_previous = False
         self._last_s = self.sim.time_s
         self._noise = np.zeros((_NOISE_BLOCK, _CHANNELS))  # the exact model's stays zero
+        self._noise_rows = list(self._noise)  # each row's view, made once (not per sample)
         self._row = _NOISE_BLOCK  # used up: the first sample refills
         # Judged once here: comparing the model with the exact preset costs tens of us.
         self._exact = m.is_exact
@@ -337,7 +338,7 @@ class SimulatedSensors:
         self._compiled(
             (sim.qpos, sim.qvel, sim.actuator_torque(), sim.foot_normal_forces(),
              now - self._last_s, self._has_previous),  # a PlantReading
-            self._sites, self._params, self._drift, self._noise[self._row],
+            self._sites, self._params, self._drift, self._noise_rows[self._row],
             (record.imu_quaternion_wxyz, record.gyroscope_rad_s, record.accelerometer_m_s2,
              record.q, record.dq, record.tau_est, record.foot_force))  # a RecordArrays
         self._row += 1

@@ -54,18 +54,31 @@ def _pin_state(qpos, qvel, q, v):
     return finite
 
 
-@numba.njit(numba.void(_CONTIGUOUS, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR,
-                       _VECTOR), cache=True)
-def _drive(ctrl, kp_bias, kd_bias, q_des, dq_des, kp, kd, tau_ff):
-    """The drivers' law as MuJoCo's actuators: ``ctrl + biasprm . (1, q, dq)``.
+@numba.njit(numba.boolean(_CONTIGUOUS, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR,
+                          _VECTOR, _VECTOR), cache=True)
+def _drive(ctrl, kp_bias, kd_bias, q_des, dq_des, kp, kd, tau_ff, effort_limit):
+    """The drivers' law as MuJoCo's actuators, ``ctrl + biasprm . (1, q, dq)``, written only
+    when a driver takes the command; False (nothing written) when it would refuse it.
 
-    ``ctrl = tau_ff + kp q_des + kd dq_des`` (NumPy's order of operations: the same bits),
-    ``biasprm[:, 1] = -kp``, ``biasprm[:, 2] = -kd``.
+    Taken: the shapes (n,), finite values, gains >= 0, ``|tau_ff| <= effort_limit``, as
+    :meth:`~wbc.robot_io.motor_command.MotorCommand.problems` judges (its check and this
+    write in one compiled call). ``ctrl = tau_ff + kp q_des + kd dq_des`` (NumPy's order of
+    operations: the same bits), ``biasprm[:, 1] = -kp``, ``biasprm[:, 2] = -kd``.
     """
-    for i in range(ctrl.shape[0]):
+    n = effort_limit.shape[0]
+    if (q_des.shape[0] != n or dq_des.shape[0] != n or kp.shape[0] != n or kd.shape[0] != n
+            or tau_ff.shape[0] != n or ctrl.shape[0] != n):
+        return False
+    for i in range(n):
+        if not (math.isfinite(q_des[i]) and math.isfinite(dq_des[i]) and math.isfinite(kp[i])
+                and math.isfinite(kd[i]) and math.isfinite(tau_ff[i])
+                and kp[i] >= 0.0 and kd[i] >= 0.0 and abs(tau_ff[i]) <= effort_limit[i]):
+            return False
+    for i in range(n):
         ctrl[i] = tau_ff[i] + kp[i] * q_des[i] + kd[i] * dq_des[i]
         kp_bias[i] = -kp[i]
         kd_bias[i] = -kd[i]
+    return True
 
 
 @dataclass
@@ -253,14 +266,17 @@ class Go2Simulator:
             ConfigurationError: A field of the wrong shape, non-finite, or a negative gain
                 (nothing is applied).
         """
-        problem = command.problems(self.effort_limit)
-        if problem:
-            raise ConfigurationError(f"motor command: {problem}")
-        # The actuator force is ctrl + biasprm . (1, q, dq): the driver's PD law.
+        # The actuator force is ctrl + biasprm . (1, q, dq): the driver's PD law. A command
+        # of float64 vectors is checked and written in one compiled call.
         try:
-            _drive(self._ctrl, self._kp, self._kd, command.q_des, command.dq_des, command.kp,
-                   command.kd, command.tau_ff)
-        except TypeError:  # not float64 arrays
+            taken = _drive(self._ctrl, self._kp, self._kd, command.q_des, command.dq_des,
+                           command.kp, command.kd, command.tau_ff, self.effort_limit)
+        except TypeError:  # not float64 vectors
+            taken = False
+        if not taken:
+            problem = command.problems(self.effort_limit)
+            if problem:
+                raise ConfigurationError(f"motor command: {problem}")
             self._ctrl[:] = (command.tau_ff + command.kp * command.q_des
                              + command.kd * command.dq_des)
             np.negative(command.kp, out=self._kp)

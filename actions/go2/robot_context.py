@@ -23,7 +23,7 @@ STANDING_HEIGHT_M = 0.25
 def tilt_deg(q: np.ndarray) -> float:
     """Angle [deg] between the base's vertical axis and the world's, for a configuration
     ``q`` (Pinocchio convention: quaternion ``q[3:7]`` as x, y, z, w)."""
-    x, y = float(q[3]), float(q[4])
+    x, y = q.item(3), q.item(4)  # Python floats without a NumPy scalar between
     return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
 
 
@@ -50,6 +50,7 @@ class RobotContext:
         self.admit_once: type | None = None
         #: Rows of ``foot_positions()`` that make each support polygon seen so far.
         self._support_rows: dict[tuple[str, ...], np.ndarray] = {}
+        self._weight_n = controller.description.total_mass * _GRAVITY  # [N]
         # The balance watch first runs when a foot unloads, mid-motion, where loading its
         # compiled code (its first call in a process) would stall that tick for
         # milliseconds: load it now, with arguments of the types the watch passes.
@@ -100,7 +101,7 @@ class RobotContext:
         support = self._support_rows.get(key)
         if support is None:
             support = self._support_rows[key] = np.array([LEGS.index(leg) for leg in legs])
-        weight = controller.description.total_mass * _GRAVITY
+        weight = self._weight_n
         shrink = max(0.0, 1.0 - count * controller.schedule.min_normal_force_n / weight)
         return capture_point_margin(controller.foot_positions(), support,
                                     controller.com_position(), controller.com_velocity(),
