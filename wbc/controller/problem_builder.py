@@ -2,45 +2,23 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from tasks import constraint_kernels
-from tasks.constraint import Constraint, ConstraintBlock, Elimination
+from tasks.constraint import Constraint, Elimination
 from tasks.contact_task import ContactTask
 from tasks.task import Task
 from tasks.variable_layout import VariableLayout
 from wbc.backends.qp_problem import QpProblem
 from wbc.controller import qp_kernel
+from wbc.controller.joint_torques import JointTorques
 from wbc.controller.task_stack import TaskStack
 from wbc.controller.tick_plan import Regularization, TickPlan
 from wbc.core.errors import ConfigurationError
 from wbc.model.kinematics import RobotKinematics
 
 __all__ = ["ProblemBuilder", "Regularization"]
-
-
-class _JointTorques(Constraint):
-    """The joint torques as rows without bounds, for a builder that has no constraint that
-    ``gives_torques`` (torque limits) registered: it needs them to recover the torques."""
-
-    name = "joint torques"
-    gives_torques = True
-
-    def __init__(self, contacts: ContactTask):
-        self.contacts = contacts
-        self._unbounded = np.full(contacts.nv - 6, constraint_kernels.INF)
-
-    def rows(self, layout: VariableLayout) -> int:
-        return layout.nv - 6
-
-    def _compiled_call(self, kinematics: RobotKinematics, layout: VariableLayout,
-                       block: ConstraintBlock) -> tuple:
-        return constraint_kernels.equation_of_motion_rows, (
-            kinematics.mass_matrix, kinematics.nonlinear_effects, self.contacts.jacobian,
-            layout.loaded, layout.force_columns, 6, block.A, block.lower, block.upper,
-            self._unbounded)
 
 
 class ProblemBuilder:
@@ -82,9 +60,10 @@ class ProblemBuilder:
         self.tasks: list[Task] = []
         self.constraints: list[Constraint] = []
         self._active: dict[Task, bool] = {}
-        self._active_tasks: list[Task] = []
+        #: The active tasks (a new tuple whenever the set changes: the tick's program's key).
+        self._active_tasks: tuple[Task, ...] = ()
         contact_task.bind(kinematics)
-        self._torque_rows = _JointTorques(contact_task)
+        self._torque_rows = JointTorques(contact_task)
         self._loaded = self.contacts
         self._plans: dict[tuple[str, ...], TickPlan] = {}
         self._current: TickPlan | None = None
@@ -132,7 +111,7 @@ class ProblemBuilder:
         """Put a registered task in the QP or take it out (kept registered, not updated)."""
         self._active[task] = bool(active)
         self._stack.set_active(task, bool(active))
-        self._active_tasks = [t for t in self.tasks if self._active[t]]
+        self._active_tasks = tuple(t for t in self.tasks if self._active[t])
 
     def add_constraint(self, constraint: Constraint) -> Constraint:
         """Register a constraint: its rows join the QP from the next tick. Returns it."""
@@ -174,7 +153,7 @@ class ProblemBuilder:
     def _restack(self) -> None:
         """Stack the tasks' rows anew (each task gets its block) and drop the plans."""
         self._stack = TaskStack(self.tasks, [self._active[t] for t in self.tasks])
-        self._active_tasks = [t for t in self.tasks if self._active[t]]
+        self._active_tasks = tuple(t for t in self.tasks if self._active[t])
         self._drop_plans()
 
     def _drop_plans(self) -> None:
@@ -273,7 +252,8 @@ class ProblemBuilder:
             self._plans[loaded] = plan
         return plan
 
-    def prepare(self, loaded_sets: Sequence[Sequence[str]]) -> list[QpProblem]:
+    def prepare(self, loaded_sets: Sequence[Sequence[str]], *,
+                swing_tasks: Mapping[str, Task] | None = None) -> list[QpProblem]:
         """Get the plans of these sets of loaded contacts ready before they are needed.
 
         Makes each layout's plan (its arrays, the constraints' and the reduction's compiled
@@ -282,6 +262,10 @@ class ProblemBuilder:
         cache), otherwise cost milliseconds, at the moment a foot leaves or touches the
         ground. The current layout and everything the next tick computes are left as they
         were. A task that cannot run yet (no target) is left to bind on its first tick.
+
+        With ``swing_tasks`` (a task for each contact, active exactly while that contact
+        is not loaded; the others as they are now), each layout's compiled tick program
+        (:meth:`TickPlan.program`) is made too.
 
         Returns:
             The QPs the tick will solve in these layouts (the reduced ones where the
@@ -293,8 +277,15 @@ class ProblemBuilder:
         self.contact_task.prepare(kin)
         problems = []
         for contacts in loaded_sets:
-            plan = self._plan_of(self._ordered(contacts))
+            loaded = self._ordered(contacts)
+            plan = self._plan_of(loaded)
             problems.append(plan.full if plan.reduced is None else plan.reduced)
+            if swing_tasks is not None:
+                swing = {task: contact not in loaded for contact, task in swing_tasks.items()}
+                try:
+                    plan.program(tuple(t for t in self.tasks if swing.get(t, self._active[t])))
+                except ConfigurationError:  # a task without a target: made on first use
+                    pass
         return problems
 
     # ------------------------------------------------------------------ the tick
@@ -314,6 +305,20 @@ class ProblemBuilder:
         for call in plan.calls:
             call()
         self._stale = plan.reduction is not None
+
+    def build(self) -> QpProblem:
+        """:meth:`evaluate` then :meth:`assemble` in one compiled call (the layout's tick
+        program, :meth:`TickPlan.program`); Python tasks and constraints run in their place
+        between its compiled parts. The QP to solve this tick."""
+        plan = self._current or self._plan()
+        solved = plan.program(self._active_tasks).run()
+        reduction = plan.reduction
+        self._stale = reduction is not None
+        if reduction is not None and solved:
+            self.reduced = True
+            return reduction.problem
+        self.reduced = False
+        return self.assemble_full()
 
     def _refresh_eliminated(self, plan: TickPlan) -> None:
         if self._stale:

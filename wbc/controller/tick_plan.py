@@ -3,6 +3,7 @@ columns, the reduction, and every compiled call bound to them."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -10,11 +11,13 @@ import numpy as np
 
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.contact_task import ContactTask
+from tasks.task import Task
 from tasks.variable_layout import VariableLayout
 from wbc.backends.qp_problem import QpProblem
 from wbc.controller import cost_kernels, qp_kernel
 from wbc.controller.task_stack import TaskStack
 from wbc.core.compiled_call import bind_compiled
+from wbc.core.compiled_program import CompiledProgram, Step
 from wbc.model.kinematics import RobotKinematics
 
 
@@ -68,8 +71,8 @@ class Reduction:
         self.tau_first = int(np.searchsorted(kept_rows, plan.blocks[tau_index].rows.start))
         self.tau_offset = np.zeros(nv - 6)
         k = len(layout.loaded)
-        call = bind_compiled(
-            qp_kernel.reduced_problem,
+        #: The reduction kernel's arguments (a step of the tick's compiled program).
+        self.arguments = (
             qp_kernel.Dynamics(kinematics.mass_matrix, kinematics.nonlinear_effects),
             qp_kernel.ContactRows(contact_task.jacobian, contact_task.drift,
                                   contact_task.desired_acceleration, layout.loaded,
@@ -84,7 +87,8 @@ class Reduction:
             qp_kernel.Work(np.zeros((k, 3, 3)), np.zeros((k, 3, 3)), np.zeros((6, 6)),
                            np.zeros((6, nz + 1)), np.zeros(nz)))
         #: Writes this tick's reduced QP; False when a leg is singular (solve the full QP).
-        self.call: Callable[[], bool] = call
+        self.call: Callable[[], bool] = bind_compiled(qp_kernel.reduced_problem,
+                                                      *self.arguments)
 
 
 
@@ -164,12 +168,37 @@ class TickPlan:
         self.full_cost: list[Callable[[], None]] = full_cost
         gone = eliminated if self.reduction is not None else [False] * len(constraints)
         self.setup()
+        self._kinematics, self._contact_task, self._gone = kinematics, contact_task, gone
+        self._programs: dict[tuple[Task, ...], CompiledProgram] = {}
+        self._last_program: tuple[tuple[Task, ...] | None, CompiledProgram | None] = (None, None)
         calls = [(c.tick_call(kinematics, layout, b), g)
                  for c, b, g in zip(constraints, self.blocks, gone)]
         #: The constraints' tick calls, without those the reduction eliminates.
         self.calls: list[Callable[[], None]] = [call for call, g in calls if not g]
         #: The eliminated constraints' tick calls: run for the full QP only.
         self.eliminated_calls: list[Callable[[], None]] = [call for call, g in calls if g]
+
+    def program(self, tasks: tuple[Task, ...]) -> CompiledProgram:
+        """The tick's work with these tasks active, as one compiled call where every step
+        has a kernel (:class:`wbc.core.compiled_program.CompiledProgram`): the contact task,
+        the tasks, the constraints the reduction keeps, then the reduction (the program
+        returns what it does). Made once for each set of active tasks.
+        """
+        last = self._last_program
+        if last[0] is tasks:  # the tick's case: the same tuple as the last tick's
+            return last[1]
+        program = self._programs.get(tasks)
+        if program is None:
+            kinematics, layout = self._kinematics, self.layout
+            steps = [_task_step(task, kinematics) for task in (self._contact_task, *tasks)]
+            steps += [_constraint_step(c, kinematics, layout, b)
+                      for c, b, gone in zip(self.constraints, self.blocks, self._gone)
+                      if not gone]
+            if self.reduction is not None:
+                steps.append((qp_kernel.reduced_problem, self.reduction.arguments))
+            program = self._programs[tasks] = CompiledProgram(steps)
+        self._last_program = (tasks, program)
+        return program
 
     @property
     def reduced(self) -> QpProblem | None:
@@ -192,3 +221,21 @@ class TickPlan:
             old, new = previous.layout.force_slice(contact), self.layout.force_slice(contact)
             if old is not None and new is not None:
                 self.x_prev[new] = previous.x_prev[old]
+
+
+def _task_step(task: Task, kinematics: RobotKinematics) -> Step:
+    """A task's kernel and arguments, or (a task written in Python) its evaluation."""
+    if kinematics is not task._kinematics:
+        task.bind(kinematics)
+    compiled = task._compiled_call(kinematics)
+    return functools.partial(task.evaluate, kinematics) if compiled is None else compiled
+
+
+def _constraint_step(constraint: Constraint, kinematics: RobotKinematics,
+                     layout: VariableLayout, block: ConstraintBlock) -> Step:
+    """A constraint's kernel and arguments, or its :meth:`tasks.Constraint.tick_call`."""
+    if type(constraint).write is Constraint.write:
+        compiled = constraint._compiled_call(kinematics, layout, block)
+        if compiled is not None:
+            return compiled
+    return constraint.tick_call(kinematics, layout, block)

@@ -195,7 +195,8 @@ class WholeBodyController:
         # The layouts a raised or landed foot switches to, with their compiled calls and
         # solver structures, made now: made on first use they cost milliseconds, at the
         # very tick the foot leaves or touches the ground.
-        for problem in self.builder.prepare(self.prepared_supports):
+        for problem in self.builder.prepare(self.prepared_supports,
+                                            swing_tasks=self.foot_tasks):
             self.backend.prepare(problem)
 
     def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
@@ -337,8 +338,7 @@ class WholeBodyController:
         self._q = q
         self.balance.before_update()
         t1 = time.perf_counter()
-        builder.evaluate()
-        problem = builder.assemble()
+        problem = builder.build()
         t2 = time.perf_counter()
         result: QpResult | None = self.backend.solve(problem)
         t3 = time.perf_counter()
