@@ -282,8 +282,11 @@ class ActionRunner:
             self._enter_tick(now_s)
             try:
                 self._tick_count += 1
+                goals = self._goals
                 if self._shut_down:
                     return
+                if not self._requests and goals.active is None and not goals.queue:
+                    return  # idle: nothing to process, start or step
                 if self._requests:  # a request appended meanwhile waits for the next tick
                     with self._lock:
                         requests, self._requests = self._requests, []

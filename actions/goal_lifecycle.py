@@ -12,7 +12,7 @@ from collections import deque
 from concurrent.futures import Future, InvalidStateError
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from actions.behaviour import StepResult
+from actions.behaviour import _GOES_ON, StepResult
 from actions.busy_policy import BusyPolicy
 from actions.goal_record import GoalRecord
 from actions.goal_status import GoalStatus, check_transition, legal_next_statuses
@@ -215,7 +215,8 @@ class GoalLifecycle:
         except Exception as err:  # noqa: BLE001 - behaviour errors must not escape the tick
             self._abort_on_exception(record, "step", err)
             return
-        if self._step_error(record, step) is None:
+        # Most ticks return the shared "goes on" result: nothing to check, publish or conclude.
+        if step is not _GOES_ON and self._step_error(record, step) is None:
             if step.feedback is not None:
                 self._publish_feedback(record, step.feedback)
             if step.status is not None:
