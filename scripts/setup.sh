@@ -39,7 +39,10 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e '.[test,scale]'
+# editable_mode=compat: the checkout on sys.path through a plain .pth line, which mypy and
+# pyright read from outside the checkout (setuptools' default editable install is an import
+# hook they cannot see: "Cannot find implementation or library stub for module 'wbc'").
+.venv/bin/python -m pip install -q -e '.[test,scale]' --config-settings editable_mode=compat
 .venv/bin/python -c "import pinocchio, placo, mujoco, qpsolvers, daqp; print('setup: ok, pinocchio', pinocchio.__version__, 'placo imports, mujoco', mujoco.__version__)"
 # Compile the numba kernels once now, not on the first run (about 80 s on 2 cores): a high
 # five with each estimator, in two processes at once, compiles the controller's, the tasks',

@@ -22,6 +22,7 @@ from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
 from sim.cli.settings import add_settings
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
+from sim.cli.version import version_text
 from sim.episode import episode_default
 from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
@@ -53,6 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "control and print its feedback and result, like a ROS 2 action client.",
         epilog=EXAMPLES_HELP + EXIT_CODES_HELP,
         formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=version_text(),
+                        help="print the installed version, licence and source URL, and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     common = run_options()
 
