@@ -90,6 +90,7 @@ class Go2Node:
         """Stop the hook and the executor, destroy the node and leave the ROS context."""
         if self.state.tick_hook in self._loop.hooks:
             self._loop.hooks.remove(self.state.tick_hook)
+        self.state.close()
         self.executor.shutdown(timeout_sec=2.0)
         if self._thread.is_alive():
             self._thread.join(timeout=2.0)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import queue
 import threading
+import time
 from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeoutError
 from dataclasses import dataclass, field
@@ -39,6 +40,10 @@ logger = logging.getLogger(__name__)
 ANSWER_WAIT_S = 5.0
 #: How often [s] a running goal's execute callback looks for feedback when none came.
 FEEDBACK_POLL_S = 0.1
+#: Pause [s] between the last feedback and the result: ROS 2 orders no topic against a
+#: service reply, and a tutorial client stops at its result, so the last feedback (the
+#: "complete" phase) is given a head start.
+LAST_FEEDBACK_LEAD_S = 0.02
 
 
 @dataclass(eq=False)
@@ -142,6 +147,7 @@ class RosActionServer:
     def _execute(self, goal_handle: Any) -> Any:
         accepted = self._goal_of(goal_handle)
         feedback_type = self.ros_type.Feedback
+        published = False
         while True:
             try:
                 event = accepted.events.get(timeout=FEEDBACK_POLL_S)
@@ -151,6 +157,9 @@ class RosActionServer:
                 break
             message: FeedbackMessage = event
             goal_handle.publish_feedback(to_ros(message.feedback, feedback_type))
+            published = True
+        if published:
+            time.sleep(LAST_FEEDBACK_LEAD_S)
         wrapped = accepted.handle.get_result_async().result()
         status = wrapped.status
         if status == GoalStatus.SUCCEEDED:

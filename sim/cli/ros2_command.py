@@ -17,7 +17,7 @@ from typing import IO, Any
 import yaml
 
 from actions.robot.robot_interface import STATE_SOURCES
-from sim.cli.arg_types import float_in, whole_in
+from sim.cli.arg_types import float_in, output_file, whole_in
 from sim.cli.exit_codes import (
     EXIT_CODES_HELP,
     EXIT_INTERRUPTED,
@@ -92,6 +92,11 @@ def add_ros2_commands(sub: Any) -> None:
                                                  fmt="g"), metavar="S",
                      help="exit after this many seconds of simulated time (default: run "
                           "until Ctrl-C or SIGTERM)")
+    sim.add_argument("--truth-report", type=output_file(".json"), metavar="FILE.json",
+                     help="at exit, write each goal's figures measured on the simulator's "
+                          "truth (raised foot against its target, tilt, the feet's forces at "
+                          "the end, the estimate's errors) and the true base pose every 4 ms "
+                          "(kept in memory: for runs of minutes; default: none)")
     add_ros2_options(ros2.add_argument_group("ROS 2"))
     ros2.set_defaults(run=run_ros2_node, parser=ros2)
 
@@ -146,6 +151,12 @@ def run_ros2_node(args: argparse.Namespace, *, stream: IO[str] | None = None) ->
     node = Go2Node(loop, node_name=args.node_name, namespace=args.namespace,
                    ros_args=args.ros_args, sim_time=True)
     paced = PacedLoop(loop)
+    report = None
+    if args.truth_report is not None:
+        from go2_ros2.truth_report import TruthReport
+
+        report = TruthReport(loop)
+        loop.hooks.append(report.tick_hook)
     previous = {sig: signal.signal(sig, lambda *_: paced.request_stop())
                 for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -164,6 +175,9 @@ def run_ros2_node(args: argparse.Namespace, *, stream: IO[str] | None = None) ->
     out.write(f"stopped at {loop.robot.time_s:.3f} s of simulated time ({paced.ticks} ticks, "
               f"{paced.resyncs} times behind the wall clock by more than 50 ms, "
               f"{node.state.published} state publications)\n")
+    if report is not None:
+        goals = report.write(args.truth_report)
+        out.write(f"truth report: {args.truth_report} ({goals} goals)\n")
     return EXIT_SUCCEEDED
 
 
