@@ -43,7 +43,7 @@ FEEDBACK_POLL_S = 0.1
 #: Pause [s] between the last feedback and the result: ROS 2 orders no topic against a
 #: service reply, and a tutorial client stops at its result, so the last feedback (the
 #: "complete" phase) is given a head start.
-LAST_FEEDBACK_LEAD_S = 0.02
+LAST_FEEDBACK_LEAD_S = 0.05
 
 
 @dataclass(eq=False)
