@@ -4,16 +4,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from actions.go2.high_five_behaviour import PHASE_NAMES
+from sim.run_plot import write_plot  # the plot's home; kept importable from here
 from wbc.model.description import JOINT_NAMES, LEGS
 from wbc.model.support_polygon import shrunk_signed_distance
 from wbc.motions.leg_lift import LiftPhase
 from wbc.robot_io.sensor_log import log_row
+
+__all__ = ["RAISED_LEG", "TRACKING_PHASES", "MetricsHook", "TickRecorder", "write_plot"]
 
 if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
@@ -136,61 +138,3 @@ class MetricsHook:
         self.metrics.record(out, stance_legs=loop.controller.support_legs(), foot_error_m=error,
                             holding=phase == PHASE_NAMES[LiftPhase.HOLDING],
                             controlling=loop.ready)
-
-
-def write_plot(path: Path, arrays: dict[str, np.ndarray], *, title: str) -> None:
-    """Raised-foot height vs target, CoM margin, FR normal force and tick time vs sim time."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Patch
-
-    t = arrays["t_s"]
-    leg = str(arrays["raised_leg"])
-    fr = list(arrays["legs"]).index("FR")
-    fig, axes = plt.subplots(5, 1, sharex=True, figsize=(9, 10.5), layout="constrained")
-    ax = axes[0]
-    ax.plot(t, arrays["foot_position"][:, 2], label=f"{leg} foot (MuJoCo)")
-    ax.plot(t, arrays["foot_target"][:, 2], "--", label="target")
-    ax.set_ylabel("foot height [m]")
-    ax.legend(loc="upper right", fontsize=8)
-    ax = axes[1]
-    ax.plot(t, arrays["com_margin_m"] * 1e3)
-    ax.axhline(0.0, color="tab:red", lw=0.8, ls=":", label="support edge")
-    ax.set_ylabel("CoM margin [mm]")
-    ax.legend(loc="upper right", fontsize=8)
-    ax = axes[2]
-    ax.plot(t, arrays["contact_forces"][:, fr, 2])
-    ax.set_ylabel("FR normal force [N]")
-    ax = axes[3]
-    error_q = arrays["q"] - arrays["q_true"]
-    error_v = arrays["v"][:, :3] - arrays["v_true"][:, :3]
-    ax.plot(t, error_q[:, 2] * 1e3, label="base height [mm]")
-    ax.plot(t, np.linalg.norm(error_v, axis=1) * 1e2, label="|base velocity| [cm/s]")
-    ax.axhline(0.0, color="0.5", lw=0.6)
-    ax.set_ylabel("estimate - truth")
-    ax.legend(loc="center right", fontsize=8)
-    ax = axes[4]
-    ax.plot(t, arrays["tick_us"], lw=0.5)
-    ax.axhline(1e3, color="tab:red", lw=0.8, ls=":", label="1 kHz period")
-    ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others
-    ax.set_ylabel("control tick [us]")
-    ax.legend(loc="upper right", fontsize=8)
-    ax.set_xlabel("sim time [s]")
-    # Shade the phases.
-    phases = arrays["phase"]
-    starts = [0] + [i for i in range(1, len(phases)) if phases[i] != phases[i - 1]]
-    colours: dict[str, Any] = {}
-    palette = plt.get_cmap("Pastel1").colors + plt.get_cmap("Pastel2").colors
-    for k, start in enumerate(starts):
-        end = starts[k + 1] if k + 1 < len(starts) else len(t) - 1
-        name = str(phases[start]) or "(waiting)"
-        colour = colours.setdefault(name, palette[len(colours) % len(palette)])
-        for ax in axes:
-            ax.axvspan(t[start], t[end], color=colour, alpha=0.6, lw=0, zorder=0)
-    fig.legend(handles=[Patch(color=c, label=n) for n, c in colours.items()],
-               loc="outside lower center", ncols=min(len(colours), 6), fontsize=8)
-    fig.suptitle(title)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)

@@ -20,7 +20,7 @@ from sim.cli.recording_options import open_recording, recording_summary
 from sim.episode_loop import startup_objects_frozen
 from sim.episode_result import REJECTED, UNAVAILABLE, EpisodeListener, EpisodeResult
 from sim.episode_runner import EpisodeRunner, RenderingUnavailableError
-from sim.run_recorder import write_plot
+from sim.run_plot import run_caption, write_plot
 from wbc.core.errors import ConfigurationError
 
 if TYPE_CHECKING:
@@ -218,7 +218,8 @@ class GoalRun(EpisodeListener):
                 np.savez_compressed(args.log, **arrays)
                 self.say(f"wrote {args.log} ({len(arrays['t_s'])} ticks)")
             if args.plot is not None:
-                write_plot(args.plot, arrays, title=f"{self.action_name} ({self.goal_text})")
+                write_plot(args.plot, arrays, title=f"{self.action_name} ({self.goal_text})",
+                           caption=run_caption(episode))
                 self.say(f"wrote {args.plot}")
 
     def _report(self, runner: EpisodeRunner, result: EpisodeResult,
