@@ -152,6 +152,35 @@ def test_a_bad_motor_command_is_refused_whole(sim):
     assert sim.time_s == before
 
 
+def test_a_refused_command_leaves_the_drivers_as_the_last_good_one_set_them(sim):
+    # The check and the drivers' write are one compiled call: a command refused at its last
+    # joint must not have written the joints before it.
+    sim.reset("standing")
+    rng = np.random.default_rng(21)
+    good = MotorCommand(q_des=rng.normal(size=12), dq_des=rng.normal(size=12),
+                        kp=rng.uniform(10, 50, 12), kd=rng.uniform(1, 3, 12),
+                        tau_ff=rng.uniform(-3, 3, 12))
+    sim.step_command(good)
+    drivers = (sim.data.ctrl.copy(), sim.model.actuator_biasprm[:, 1:3].copy())
+    for field, value, message in (("q_des", np.nan, r"q_des: non-finite at joints \[11\]"),
+                                  ("kd", -1.0, r"kd: negative gain at joints \[11\]"),
+                                  ("tau_ff", 1e3, r"tau_ff: beyond the effort .* \[11\]")):
+        bad = good.copy()
+        bad.q_des[:], bad.kp[:] = 0.1, 99.0  # differs from the good one at every joint
+        getattr(bad, field)[11] = value
+        with pytest.raises(ConfigurationError, match=f"motor command: {message}"):
+            sim.step_command(bad)
+        np.testing.assert_array_equal(sim.data.ctrl, drivers[0])
+        np.testing.assert_array_equal(sim.model.actuator_biasprm[:, 1:3], drivers[1])
+    # Arrays of another type than float64 take NumPy's path to the same drivers' values.
+    as_float32 = MotorCommand(**{f: getattr(good, f).astype(np.float32) for f in
+                                 ("q_des", "dq_des", "kp", "kd", "tau_ff")})
+    expected = (as_float32.tau_ff + as_float32.kp * as_float32.q_des
+                + as_float32.kd * as_float32.dq_des)
+    sim.step_command(as_float32)
+    np.testing.assert_array_equal(sim.data.ctrl, expected)
+
+
 def test_state_is_the_conventions_conversion(sim, model):
     rng = np.random.default_rng(12)
     for _ in range(50):
