@@ -29,6 +29,8 @@ from go2_ros2.ros_names import ROS_ACTION_NAMES, ros_action_type
 SERVER_WAIT_S = 10.0
 #: Longest wait [s] for a canceled goal's result (its unwind).
 CANCEL_WAIT_S = 15.0
+#: How long [s] feedback is still taken after the result arrived.
+FEEDBACK_DRAIN_S = 0.3
 
 
 class Outcome(Enum):
@@ -118,6 +120,9 @@ def send_goal_over_ros2(action_name: str, goal: Message, *, say: Callable[[str],
             if not spin_until(result_future.done, CANCEL_WAIT_S):
                 say(f"No result within {CANCEL_WAIT_S:g} s of the cancel")
                 return Outcome.INTERRUPTED if interrupted else Outcome.NOT_SUCCEEDED
+        # ROS 2 orders no topic against a service reply: the last feedback may come after
+        # the result; a short wait prints it before the result, where it belongs.
+        spin_until(lambda: False, FEEDBACK_DRAIN_S)
         response = result_future.result()
         result = to_library(response.result, action_type.result_type)
         say("\nResult:\n" + block(result) + "\n")
