@@ -28,6 +28,10 @@ from foxglove.channels import (
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import Go2Description
 
+#: The MCAP chunk size [bytes] before compression: a chunk is compressed inside the ``log``
+#: call that fills it, and 64 kB (not the SDK's 1 MB) keeps that call's longest time near
+#: 1 ms of CPU instead of 1.8 ms (measured: 1,500 snapshots), the file 9 % larger.
+CHUNK_BYTES = 64 * 1024
 #: The 3D panel's URDF layer reads a topic of this schema.
 DESCRIPTION_SCHEMA = "std_msgs/msg/String"
 _NUMBER = {"type": "number"}
@@ -108,8 +112,11 @@ class RunChannels:
         self.server: Any = None
         self._port: int | None = None
         if mcap_path is not None:
-            self.writer = foxglove.open_mcap(str(mcap_path), allow_overwrite=True,
-                                             context=context)
+            from foxglove.mcap import MCAPWriteOptions
+
+            self.writer = foxglove.open_mcap(
+                str(mcap_path), allow_overwrite=True, context=context,
+                writer_options=MCAPWriteOptions(chunk_size=CHUNK_BYTES))
             now_ns = time.time_ns()
             self.writer.attach(log_time=now_ns, create_time=now_ns, name="go2.urdf",
                                media_type="application/xml",
