@@ -1,4 +1,5 @@
-"""Add a task of your own to the whole-body QP: a base-height task, written in NumPy.
+"""Add a task of your own to the whole-body QP: a base-height task, written in NumPy, and
+the same task with a compiled kernel (which the tick runs inside its one compiled call).
 
 Run ``python examples/custom_task.py``: the GO2 stands on the default (realistic) MuJoCo
 plant and raises its base by 4 cm in one second, by a task this file defines, while the
@@ -6,6 +7,8 @@ built-in centre-of-mass task keeps the CoM over the feet on x and y.
 """
 
 from __future__ import annotations
+
+import numba
 
 from sim.control_loop import ControlLoop
 from tasks import RobotKinematics, Task
@@ -34,17 +37,42 @@ class BaseHeightTask(Task):
         self.drift[0] = kinematics.frame_drift[i, 2]
 
 
+@numba.njit(cache=True)
+def base_height_rows(frame_position, frame_velocity, frame_jacobian, frame_drift, index,
+                     reference, gains, error, error_rate, jacobian, drift, desired):
+    """What :meth:`BaseHeightTask.compute` writes, and the PD law, in compiled code."""
+    error[0] = reference[0, 0] - frame_position[index, 2]
+    error_rate[0] = reference[1, 0] - frame_velocity[index, 2]
+    jacobian[0, :] = frame_jacobian[index, 2, :]
+    drift[0] = frame_drift[index, 2]
+    desired[0] = gains[0] * error[0] + gains[1] * error_rate[0] + reference[2, 0]
+
+
+class CompiledBaseHeightTask(BaseHeightTask):
+    """:class:`BaseHeightTask` with a kernel: ``_compiled_call`` returns it and every
+    argument (arrays updated in place; the task's arrays are views of the QP's rows), and
+    the controller runs it inside the tick's one compiled call, as it runs the built-in
+    tasks' kernels."""
+
+    def _compiled_call(self, kinematics: RobotKinematics) -> tuple:
+        k = kinematics
+        return base_height_rows, (
+            k.frame_position, k.frame_velocity, k.frame_jacobian, k.frame_drift,
+            int(self.frame_indices[0]), self.reference, self.gains, self.error,
+            self.error_rate, self.jacobian, self.drift, self.desired_acceleration)
+
+
 def run(*, raise_m: float = 0.04, ramp_s: float = 1.0, settle_s: float = 1.0,
-        with_task: bool = True) -> dict[str, float]:
+        with_task: bool = True, compiled: bool = False) -> dict[str, float]:
     """Stand, raise the base by ``raise_m`` over ``ramp_s``, hold ``settle_s``; returns a
     summary: start and end base height [m] (the simulator's truth), target [m], QP
-    failures, worst violation.
+    failures, worst violation. ``compiled``: the task with its kernel.
 
     The controller reads the state estimated from the simulated GO2's sensors, as it would
     on a robot; the loop's pieces are driven by hand: read, step, write.
     """
     controller = WholeBodyController()
-    height = BaseHeightTask()
+    height = CompiledBaseHeightTask() if compiled else BaseHeightTask()
     if with_task:
         controller.add_task(height)
         controller.com_task.row_weights[2] = 0.0   # the CoM height is the new task's job

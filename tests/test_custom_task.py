@@ -133,3 +133,20 @@ def test_a_constraint_written_for_the_old_update_name_is_refused_naming_write():
         class _Old(Constraint):
             def update(self, kinematics, layout, block):
                 pass
+
+
+@pytest.mark.slow  # two controllers (seconds)
+def test_the_compiled_example_task_gives_the_python_one_s_torques_inside_the_tick_program():
+    taus, calls = [], []
+    for task_type in (example.BaseHeightTask, example.CompiledBaseHeightTask):
+        controller = WholeBodyController()
+        task = controller.add_task(task_type())
+        q = controller.description.pose("standing")
+        controller.reset(q)
+        task.set_target(float(q[2]) + 0.02, 0.01)
+        v = np.linspace(-0.1, 0.1, controller.model.nv)
+        taus.append([controller.step(q, v).tau for _ in range(3)])
+        calls.append(controller.builder.plan.last_program.calls)
+    np.testing.assert_allclose(taus[0], taus[1], rtol=0.0, atol=1e-12)
+    # The Python task runs between two compiled calls; the compiled one inside the one call.
+    assert calls == [3, 1]

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import abc
 from collections.abc import Callable
+from typing import Any
+
+import numpy as np
 
 from wbc.backends.qp_problem import QpProblem, QpResult
 from wbc.core.errors import UnknownNameError
@@ -30,6 +33,14 @@ class QpBackend(abc.ABC):
     @abc.abstractmethod
     def solve(self, problem: QpProblem) -> QpResult:
         """Solve the current ``problem``."""
+
+    def compiled_solve(self, problem: QpProblem) -> tuple[Any, tuple, np.ndarray] | None:
+        """A compiled kernel, its arguments, and the array it writes the solution to, that
+        solve ``problem`` as :meth:`solve` does (the kernel returns whether it found a
+        solution), for a caller that runs it inside its own compiled call
+        (:class:`wbc.core.compiled_program.CompiledProgram`); ``None`` (the default): call
+        :meth:`solve`. It stays valid while the problem's arrays and structure do."""
+        return None
 
     def prepare(self, problem: QpProblem) -> None:  # noqa: B027 - optional hook, no-op default
         """Build, ahead of its first solve, what solving ``problem`` needs, without changing

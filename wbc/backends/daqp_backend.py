@@ -8,8 +8,13 @@ import logging
 import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
+import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
 
 from wbc.backends.backend import QpBackend, register_backend, register_missing
 from wbc.backends.qp_problem import QpProblem, QpResult
@@ -116,11 +121,59 @@ class _DirectCall:
                 and problem.bupper is bupper and problem.blower is blower
                 and sense is held_sense)
 
+    def compiled(self) -> tuple[Any, tuple, np.ndarray]:
+        """:func:`direct_solve` and its arguments on this call's structures (held by the
+        address array, which keeps this call alive)."""
+        function = ctypes.cast(self.function(), ctypes.c_void_p).value
+        addresses = _Addresses([function, ctypes.addressof(self.result),
+                                ctypes.addressof(self.problem), ctypes.addressof(self.settings)])
+        addresses.call = self
+        flag = ctypes.addressof(self.result) + _CResult.exitflag.offset
+        exitflag = np.ctypeslib.as_array((ctypes.c_int * 1).from_address(flag))
+        return direct_solve, (addresses, exitflag, self.x), self.x
+
     def __call__(self) -> tuple[int, int]:
         """Solve into :attr:`x` and :attr:`lam`; DAQP's exit flag and iteration count."""
         function, result, problem, settings = self._call
         function(result, problem, settings)
         return self.result.exitflag, self.result.iter
+
+
+@intrinsic
+def _call_c(typingctx, addresses):  # pragma: no cover - compiled
+    """Call ``void f(void *, void *, void *)`` at ``addresses[0]`` with ``addresses[1:4]``."""
+    def codegen(context, builder, signature, args):
+        array = context.make_array(signature.args[0])(context, builder, args[0])
+        pointer = ir.IntType(8).as_pointer()
+        values = [builder.load(builder.gep(array.data, [ir.IntType(64)(i)])) for i in range(4)]
+        function = builder.inttoptr(values[0], ir.FunctionType(
+            ir.VoidType(), [pointer] * 3).as_pointer())
+        builder.call(function, [builder.inttoptr(v, pointer) for v in values[1:]])
+        return context.get_dummy_value()
+    return types.void(addresses), codegen
+
+
+@numba.njit(cache=True)
+def direct_solve(addresses, exitflag, x):  # pragma: no cover - compiled
+    """``daqp_quadprog`` at ``addresses[0]`` on the result, problem and settings structures
+    at ``addresses[1:4]``; whether it found a finite solution (``exitflag`` views the
+    result's exit flag, ``x`` its solution)."""
+    _call_c(addresses)
+    if exitflag[0] != 1 and exitflag[0] != 2:
+        return False
+    for i in range(x.size):
+        if not math.isfinite(x[i]):
+            return False
+    return True
+
+
+class _Addresses(np.ndarray):
+    """An int64 array of addresses that holds what they point into (``call``)."""
+
+    call: Any = None
+
+    def __new__(cls, values: list[int]) -> _Addresses:
+        return np.asarray(values, dtype=np.int64).view(cls)
 
 
 def _library() -> ctypes.CDLL:
@@ -235,6 +288,16 @@ class DaqpBackend(QpBackend):
             current = self._state
             self.setup(problem)
             self._state = current
+
+    def compiled_solve(self, problem: QpProblem) -> tuple[Any, tuple, np.ndarray] | None:
+        """DAQP's C function called from compiled code on the problem's direct call (see
+        :meth:`QpBackend.compiled_solve`); ``None`` with a hot start or without direct
+        calls."""
+        if self.hot_start:
+            return None
+        self.prepare(problem)
+        state = self._states[id(problem)]
+        return None if state.call is None else state.call.compiled()
 
     @property
     def uses_direct_call(self) -> bool:

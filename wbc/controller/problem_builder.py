@@ -10,6 +10,7 @@ from tasks.constraint import Constraint, Elimination
 from tasks.contact_task import ContactTask
 from tasks.task import Task
 from tasks.variable_layout import VariableLayout
+from wbc.backends.backend import QpBackend
 from wbc.backends.qp_problem import QpProblem
 from wbc.controller import qp_kernel
 from wbc.controller.joint_torques import JointTorques
@@ -31,12 +32,11 @@ class ProblemBuilder:
     is used (or :meth:`prepare` makes it): its arrays, its compiled calls bound to them, its
     reduction. Registering or removing anything drops every plan.
 
-    Every tick, :meth:`update` runs the tasks and constraints and :meth:`assemble` stacks
-    them: into the full QP over ``x = [qdd, forces, slacks]``, or, when the registered
-    constraints declare both :class:`tasks.Elimination` kinds (once each, on the builder's
-    contact task) and ``reduce`` is set, into the reduced QP over the free variables (see
-    :mod:`wbc.controller.qp_kernel`), which has the same solution.
-    """
+    Every tick, :meth:`evaluate` runs the tasks and constraints and :meth:`assemble` stacks
+    them (:meth:`build`: both, one compiled call): into the full QP over ``x = [qdd,
+    forces, slacks]``, or, when the constraints declare both :class:`tasks.Elimination`
+    kinds (once each, on the builder's contact task) and ``reduce`` is set, into the
+    reduced QP over the free variables (:mod:`wbc.controller.qp_kernel`), same solution."""
 
     def __init__(self, kinematics: RobotKinematics, contact_task: ContactTask,
                  contacts: Sequence[str], *, leg_columns: np.ndarray | None = None,
@@ -253,7 +253,8 @@ class ProblemBuilder:
         return plan
 
     def prepare(self, loaded_sets: Sequence[Sequence[str]], *,
-                swing_tasks: Mapping[str, Task] | None = None) -> list[QpProblem]:
+                swing_tasks: Mapping[str, Task] | None = None,
+                backend: QpBackend | None = None) -> list[QpProblem]:
         """Get the plans of these sets of loaded contacts ready before they are needed.
 
         Makes each layout's plan (its arrays, the constraints' and the reduction's compiled
@@ -265,7 +266,8 @@ class ProblemBuilder:
 
         With ``swing_tasks`` (a task for each contact, active exactly while that contact
         is not loaded; the others as they are now), each layout's compiled tick program
-        (:meth:`TickPlan.program`) is made too.
+        (:meth:`TickPlan.program`) is made too; with ``backend``, its preparation of each
+        QP and the compiled solve (:meth:`TickPlan.solve_program`).
 
         Returns:
             The QPs the tick will solve in these layouts (the reduced ones where the
@@ -280,6 +282,9 @@ class ProblemBuilder:
             loaded = self._ordered(contacts)
             plan = self._plan_of(loaded)
             problems.append(plan.full if plan.reduced is None else plan.reduced)
+            if backend is not None:
+                backend.prepare(problems[-1])
+                plan.solve_program(backend)
             if swing_tasks is not None:
                 swing = {task: contact not in loaded for contact, task in swing_tasks.items()}
                 try:
@@ -307,9 +312,8 @@ class ProblemBuilder:
         self._stale = plan.reduction is not None
 
     def build(self) -> QpProblem:
-        """:meth:`evaluate` then :meth:`assemble` in one compiled call (the layout's tick
-        program, :meth:`TickPlan.program`); Python tasks and constraints run in their place
-        between its compiled parts. The QP to solve this tick."""
+        """:meth:`evaluate` then :meth:`assemble` in one compiled call (the layout's
+        :meth:`TickPlan.program`, Python tasks run in their place): this tick's QP."""
         plan = self._current or self._plan()
         solved = plan.program(self._active_tasks).run()
         reduction = plan.reduction
@@ -319,6 +323,18 @@ class ProblemBuilder:
             return reduction.problem
         self.reduced = False
         return self.assemble_full()
+
+    def solve(self, backend: QpBackend) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """After :meth:`build`: the reduced QP solved and accepted in one compiled call
+        (:meth:`TickPlan.solve_program`): ``x``, the torques [N m] and the forces (new
+        arrays); ``None`` without one or when it fails (then solve and :meth:`accept`)."""
+        plan = self._current
+        program = plan.solve_program(backend) if self.reduced and plan is not None else None
+        if program is None or not program.run():
+            if program is not None:
+                plan.forget_solve()  # the failure path sets the backend up anew
+            return None
+        return plan.x, plan.tau.copy(), plan.forces.copy()
 
     def _refresh_eliminated(self, plan: TickPlan) -> None:
         if self._stale:

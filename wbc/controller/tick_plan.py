@@ -13,11 +13,12 @@ from tasks.constraint import Constraint, ConstraintBlock
 from tasks.contact_task import ContactTask
 from tasks.task import Task
 from tasks.variable_layout import VariableLayout
+from wbc.backends.backend import QpBackend
 from wbc.backends.qp_problem import QpProblem
 from wbc.controller import cost_kernels, qp_kernel
 from wbc.controller.task_stack import TaskStack
 from wbc.core.compiled_call import bind_compiled
-from wbc.core.compiled_program import CompiledProgram, Step
+from wbc.core.compiled_program import CompiledProgram, Guard, Step
 from wbc.model.kinematics import RobotKinematics
 
 
@@ -171,6 +172,10 @@ class TickPlan:
         self._kinematics, self._contact_task, self._gone = kinematics, contact_task, gone
         self._programs: dict[tuple[Task, ...], CompiledProgram] = {}
         self._last_program: tuple[tuple[Task, ...] | None, CompiledProgram | None] = (None, None)
+        self._tau_prev = tau_prev
+        #: The torques [N m] and forces (contacts, 3) [N] of the last solve in compiled code.
+        self.tau, self.forces = np.zeros(nv - 6), np.zeros((len(layout.contacts), 3))
+        self._solve: tuple[QpBackend | None, CompiledProgram | None, int] = (None, None, -1)
         calls = [(c.tick_call(kinematics, layout, b), g)
                  for c, b, g in zip(constraints, self.blocks, gone)]
         #: The constraints' tick calls, without those the reduction eliminates.
@@ -199,6 +204,39 @@ class TickPlan:
             program = self._programs[tasks] = CompiledProgram(steps)
         self._last_program = (tasks, program)
         return program
+
+    @property
+    def last_program(self) -> CompiledProgram | None:
+        """The program the last :meth:`program` call gave (the last tick's)."""
+        return self._last_program[1]
+
+    def solve_program(self, backend: QpBackend) -> CompiledProgram | None:
+        """The reduced QP solved by ``backend``'s compiled solve
+        (:meth:`wbc.backends.backend.QpBackend.compiled_solve`) and, when it finds a
+        solution, accepted (``x``, ``x_prev``, :attr:`tau`, :attr:`forces`, the torque-rate
+        cost's torques), in one compiled call that returns whether it found one; ``None``
+        without a reduction or a compiled solve. Kept while the backend and the reduced QP's
+        structure are the same."""
+        reduction = self.reduction
+        if reduction is None:
+            return None
+        held, program, version = self._solve
+        problem = reduction.problem
+        if held is backend and version == problem.structure_version:
+            return program
+        program, compiled = None, backend.compiled_solve(problem)
+        if compiled is not None:
+            kernel, arguments, z = compiled
+            layout, r = self.layout, reduction
+            program = CompiledProgram([Guard(kernel, arguments), (qp_kernel.accept, (
+                r.T, r.t0, z, self.x, self.x_prev, problem.A, r.tau_first, r.tau_offset,
+                self.tau, layout.loaded, layout.force_start, self.forces, self._tau_prev))])
+        self._solve = (backend, program, problem.structure_version)
+        return program
+
+    def forget_solve(self) -> None:
+        """Ask the backend for its compiled solve again (after it was set up anew)."""
+        self._solve = (None, None, -1)
 
     @property
     def reduced(self) -> QpProblem | None:

@@ -195,9 +195,8 @@ class WholeBodyController:
         # The layouts a raised or landed foot switches to, with their compiled calls and
         # solver structures, made now: made on first use they cost milliseconds, at the
         # very tick the foot leaves or touches the ground.
-        for problem in self.builder.prepare(self.prepared_supports,
-                                            swing_tasks=self.foot_tasks):
-            self.backend.prepare(problem)
+        self.builder.prepare(self.prepared_supports, swing_tasks=self.foot_tasks,
+                             backend=self.backend)
 
     def set_com_target(self, position: np.ndarray, velocity: np.ndarray | None = None,
                        acceleration: np.ndarray | None = None) -> None:
@@ -315,12 +314,9 @@ class WholeBodyController:
 
     def step(self, q: np.ndarray, v: np.ndarray) -> ControlOutput:
         """One control tick: the schedule's ramps, kinematics, tasks and constraints, QP
-        assembly, solve, motor command.
-
-        Never raises on bad numbers in the state or a failed solve: it returns the safe
-        fallback command (joint damping around the last good torques) with status
-        ``FALLBACK`` and a message, and stays usable for the next tick.
-        """
+        assembly, solve, motor command. Never raises on bad numbers in the state or a
+        failed solve: it returns the safe fallback command (joint damping around the last
+        good torques) with status ``FALLBACK`` and a message, and stays usable."""
         t0 = time.perf_counter()
         self.ticks += 1
         self.schedule.advance()
@@ -340,21 +336,27 @@ class WholeBodyController:
         t1 = time.perf_counter()
         problem = builder.build()
         t2 = time.perf_counter()
-        result: QpResult | None = self.backend.solve(problem)
+        # Solved and accepted in one compiled call where the backend allows it; else (and
+        # on a failure, solved again to name it) through the backend's solve.
+        solved, status, message, group = builder.solve(self.backend), ControlStatus.OK, "", ""
         t3 = time.perf_counter()
-        status, message, group = ControlStatus.OK, "", ""
-        if not result.found:
-            self.failures += 1
-            # A fresh workspace for the next tick: the solver's may hold a bad state.
-            self.backend.setup(problem)
-            result, status, message, group = self.recovery.recover(result)
-            if result is None:
-                return self._fallback(v, message, t0, group=group)
-        forces = np.empty((len(self.legs), 3))
-        x, tau_qp = builder.accept(result.x, forces)
-        if status is not ControlStatus.OK:
-            np.clip(tau_qp, -self.tau_max, self.tau_max, out=tau_qp)
-        builder.tau_prev[:] = tau_qp
+        if solved is not None:
+            x, tau_qp, forces = solved
+        else:
+            result: QpResult | None = self.backend.solve(problem)
+            t3 = time.perf_counter()
+            if not result.found:
+                self.failures += 1
+                # A fresh workspace for the next tick: the solver's may hold a bad state.
+                self.backend.setup(problem)
+                result, status, message, group = self.recovery.recover(result)
+                if result is None:
+                    return self._fallback(v, message, t0, group=group)
+            forces = np.empty((len(self.legs), 3))
+            x, tau_qp = builder.accept(result.x, forces)
+            if status is not ControlStatus.OK:
+                np.clip(tau_qp, -self.tau_max, self.tau_max, out=tau_qp)
+            builder.tau_prev[:] = tau_qp
         self.recovery.tau_good = tau_qp
         self._forces = forces
         command = self.motor.shape(q[7:], v[6:], x[6:nv], tau_qp)
@@ -370,11 +372,9 @@ class WholeBodyController:
     # ------------------------------------------------------------------ failures
 
     def safe_command(self, v: np.ndarray, message: str) -> ControlOutput:
-        """The safe fallback command for velocity ``v``, with status FALLBACK and ``message``.
-
-        For a caller that finds a command unusable after the controller produced it (a guard
-        in the control loop, a fault detected downstream).
-        """
+        """The safe fallback command for velocity ``v``, with status FALLBACK and ``message``,
+        for a caller that finds a command unusable after the controller produced it (a guard
+        in the control loop, a fault detected downstream)."""
         return self._fallback(v, message, time.perf_counter())
 
     def _fallback(self, v: np.ndarray, message: str, t0: float, *,

@@ -10,15 +10,26 @@ import sys
 import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
 from numba.core import types
 from numba.extending import intrinsic
 
-#: A kernel and every one of its arguments, or a Python callable of no arguments.
-Step = tuple[Any, tuple] | Callable[[], Any]
+
+class Guard(NamedTuple):
+    """A step whose kernel returns whether the program goes on: when it returns False, the
+    program stops there and returns False (a program that runs to its end after a guard
+    returns True)."""
+
+    kernel: Any
+    arguments: tuple
+
+
+#: A kernel and every one of its arguments, a :class:`Guard`, or a Python callable of no
+#: arguments.
+Step = tuple[Any, tuple] | Guard | Callable[[], Any]
 
 _POINTERS = {np.dtype(np.float64): types.float64, np.dtype(np.int64): types.int64,
              np.dtype(np.int32): types.int32, np.dtype(np.bool_): types.boolean}
@@ -152,13 +163,22 @@ def _compile(run: Sequence[tuple[Any, tuple]]) -> Callable[[], Any]:
     """One generated function for consecutive kernels, bound to its table and extras."""
     writer = _Writer()
     calls = []
-    for kernel, args in run:
+    guarded = False
+    for step in run:
+        kernel, args = step
         if not isinstance(kernel, numba.core.registry.CPUDispatcher):
             raise TypeError(f"CompiledProgram: a step's kernel must be a numba.njit function, "
                             f"received {type(kernel).__name__}")
-        name = writer.name("_k", kernel)
-        calls.append(f"{name}(" + ", ".join(writer.expression(a) for a in args) + ")")
-    body = writer.lines + [f"    {c}" for c in calls[:-1]] + [f"    return {calls[-1]}"]
+        call = f"{writer.name('_k', kernel)}(" + ", ".join(map(writer.expression, args)) + ")"
+        if isinstance(step, Guard):
+            guarded = True
+            call = f"if not {call}:\n        return False"
+        calls.append(call)
+    if guarded:  # a guarded program returns a bool
+        last = [f"    {calls[-1]}", "    return True"]
+    else:
+        last = [f"    return {calls[-1]}"]
+    body = writer.lines + [f"    {c}" for c in calls[:-1]] + last
     source = "def program(table, extra):\n" + "\n".join(body) + "\n"
     names = tuple(sorted(writer.names.items()))
     key = (source, tuple(id(v) for _, v in names))
