@@ -66,6 +66,16 @@ class RecordedRun:
         t = self.arrays["t_s"]
         return float(t[-1] - t[0]) if len(t) else 0.0
 
+    def caption(self) -> str:
+        """The plot's second title line from the recording's metadata (empty without it)."""
+        m = self.metadata
+        if "plant" not in m:
+            return ""
+        head = f"plant {m['plant']}, control {m.get('control_rate_hz', '?')} Hz"
+        if m.get("state") == "truth":
+            return f"{head}; state: the simulator's truth (no estimator)"
+        return f"{head}; state estimated by {m.get('estimator', '?')}"
+
     def describe(self) -> str:
         """One line: what the file holds."""
         states = len(self.arrays["t_s"])
@@ -134,6 +144,9 @@ def _load_mcap(path: Path) -> RecordedRun:
                              f"(channels: {', '.join(run.channels) or 'none'}); record one "
                              "with --mcap")
     run.arrays = _state_arrays(states)
+    rate = run.metadata.get("control_rate_hz", "")
+    if rate.replace(".", "", 1).isdigit() and float(rate) > 0:
+        run.arrays["control_period_s"] = np.array(1.0 / float(rate))
     return run
 
 

@@ -137,7 +137,10 @@ def plot_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = "")
                       "velocity)", fontsize=8, loc="left")
     ax = axes[5]
     ax.plot(t, arrays["tick_us"], lw=0.5)
-    period_us = float(np.median(np.diff(t))) * 1e6 if len(t) > 1 else 1e3
+    if "control_period_s" in arrays:  # a recording's rows are snapshots, not ticks
+        period_us = float(arrays["control_period_s"]) * 1e6
+    else:
+        period_us = float(np.median(np.diff(t))) * 1e6 if len(t) > 1 else 1e3
     ax.axhline(period_us, color="tab:red", lw=0.8, ls=":",
                label=f"control period ({1e6 / period_us:.0f} Hz)")
     ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others

@@ -27,6 +27,8 @@ SCHEMAS = {"/tf": "foxglove.FrameTransforms", "/joint_states": "foxglove.JointSt
            "/robot_description": "std_msgs/msg/String",
            **{topic: name for topic, (name, _) in JSON_CHANNELS.items()}}
 PERIOD_S = 1e-3
+METADATA = {"command": "test", "plant": "menagerie", "state": "estimate", "estimator": "kf",
+            "control_rate_hz": "1000"}
 
 
 def snapshot(t_s: float, q: np.ndarray, *, truth: bool = True, raised: bool = False) -> Snapshot:
@@ -56,7 +58,7 @@ def standing(description) -> np.ndarray:
 def recorded(tmp_path_factory, standing) -> Path:
     """25 snapshots at 50 Hz (0.48 s), the last 10 with the foot raised, and two lines."""
     path = tmp_path_factory.mktemp("rec") / "run.mcap"
-    recording = RunRecording(RunChannels(mcap_path=path, metadata={"command": "test"}),
+    recording = RunRecording(RunChannels(mcap_path=path, metadata=METADATA),
                              control_period_s=PERIOD_S)
     recording.line("state: test", 0.0)
     for k in range(25 * recording.decimation):
@@ -89,7 +91,7 @@ def test_a_recording_lists_every_channel_with_its_schema_counts_and_the_urdf(rec
     assert counts["/log"] == 2 and counts["/action/feedback"] == 1
     assert counts["/robot_description"] == 1  # once a second of robot time: 0.48 s
     assert attachments["go2.urdf"] == description.urdf_path.read_bytes()
-    assert metadata["go2-wbc"] == {"command": "test"}
+    assert metadata["go2-wbc"] == METADATA
     assert "<robot" in description_data[0] and "package://" not in description_data[0]
     assert description.package_share_dir.as_uri() in description_data[0]
     assert summary.statistics.message_end_time == round(0.48 * 1e9)
@@ -105,6 +107,9 @@ def test_the_recording_reads_back_as_the_plot_s_arrays(recorded, standing):
     np.testing.assert_allclose(run.arrays["foot_target"][-1], [0.3, -0.15, 0.4])
     assert run.arrays["contact_forces"].shape == (25, 4, 3)
     assert list(run.arrays["phase"][[0, -1]]) == ["shifting", "holding"]
+    # The control period from the metadata (the rows are 50 Hz snapshots), the plot's caption.
+    assert float(run.arrays["control_period_s"]) == PERIOD_S
+    assert run.caption() == "plant menagerie, control 1000 Hz; state estimated by kf"
     assert run.describe() == (f"{recorded}: MCAP, 10 channels, {len(run.messages)} messages, "
                               "25 states over 0.480 s, simulated")
 

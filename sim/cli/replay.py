@@ -71,10 +71,11 @@ def replay_run(args: argparse.Namespace, *, stream: IO[str] | None = None) -> in
                   "run); the plot compares the estimate with the simulator's state",
                   file=sys.stderr)
             return EXIT_USAGE
-        from sim.run_recorder import write_plot
+        from sim.run_plot import write_plot
 
         title = run.metadata.get("command", "") or run.path.name
-        write_plot(args.plot, run.arrays, title=f"{title} (replayed from {run.path.name})")
+        write_plot(args.plot, run.arrays, title=f"{title} (replayed from {run.path.name})",
+                   caption=run.caption())
         say(f"wrote {args.plot}")
     problem = "headless (--headless)" if args.headless else window_problem()
     if problem and args.foxglove is None:
