@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeoutError
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar, overload
 
 from actions.action_runner import ActionRunner
 from actions.action_type import ActionType
@@ -24,6 +24,18 @@ if TYPE_CHECKING:
     from actions.responses import CancelResponse, FeedbackMessage, WrappedResult
 
 T = TypeVar("T")
+#: The action's goal, result and feedback classes (``HighFiveGoal``, ...), from its
+#: :class:`ActionType`: a client made with the interface is typed by it.
+GoalT = TypeVar("GoalT")
+ResultT = TypeVar("ResultT")
+FeedbackT = TypeVar("FeedbackT")
+
+
+class HoldsRunner(Protocol):
+    """What holds a runner as ``.runner`` (a ``ControlLoop``: rclpy's node)."""
+
+    @property
+    def runner(self) -> ActionRunner: ...
 
 
 class ActionTimeoutError(WbcError, TimeoutError):
@@ -51,7 +63,7 @@ class RunnerStalledError(ActionTimeoutError):
     """Nothing ticks the runner: no thread calls ``tick`` and no spin hook can drive it."""
 
 
-class ActionClient:
+class ActionClient(Generic[GoalT, ResultT, FeedbackT]):
     """Client of one named action on a runner. Every method may be called from any thread.
 
     Made as ``ActionClient(runner, "high_five")``, or in rclpy's order with the interface,
@@ -72,9 +84,17 @@ class ActionClient:
             arguments are of the wrong types.
     """
 
-    def __init__(
-        self, runner: ActionRunner, action: ActionType | str, action_name: str | None = None
-    ) -> None:
+    @overload
+    def __init__(self: ActionClient[GoalT, ResultT, FeedbackT], runner: ActionRunner | HoldsRunner,
+                 action: ActionType[GoalT, ResultT, FeedbackT], action_name: str) -> None: ...
+
+    @overload
+    def __init__(self: ActionClient[Any, Any, Any], runner: ActionRunner | HoldsRunner,
+                 action: str, action_name: None = None) -> None: ...
+
+    def __init__(self, runner: ActionRunner | HoldsRunner,
+                 action: ActionType[Any, Any, Any] | str, action_name: str | None = None
+                 ) -> None:
         if action_name is None:
             if not isinstance(action, str):
                 raise ConfigurationError(
@@ -151,9 +171,9 @@ class ActionClient:
 
     def send_goal_async(
         self,
-        goal: Any,
-        feedback_callback: Callable[[FeedbackMessage], None] | None = None,
-    ) -> Future[ClientGoalHandle]:
+        goal: GoalT,
+        feedback_callback: Callable[[FeedbackMessage[FeedbackT]], None] | None = None,
+    ) -> Future[ClientGoalHandle[GoalT, ResultT]]:
         """Send a goal; the future resolves on the tick that accepts or rejects it.
 
         Args:
@@ -173,18 +193,18 @@ class ActionClient:
         """
         return self._runner.submit_goal(self._server, goal, feedback_callback)
 
-    def cancel(self, goal_handle: ClientGoalHandle) -> Future[CancelResponse]:
+    def cancel(self, goal_handle: ClientGoalHandle[Any, Any]) -> Future[CancelResponse]:
         """Ask to cancel a goal; same as ``goal_handle.cancel_goal_async()``."""
         return goal_handle.cancel_goal_async()
 
     def send_goal_and_wait(
         self,
-        goal: Any,
+        goal: GoalT,
         timeout: float | None = None,
-        feedback_callback: Callable[[FeedbackMessage], None] | None = None,
+        feedback_callback: Callable[[FeedbackMessage[FeedbackT]], None] | None = None,
         *,
         stall_timeout_s: float = 2.0,
-    ) -> WrappedResult:
+    ) -> WrappedResult[ResultT]:
         """Send a goal and block until it ends.
 
         How it makes progress:
@@ -225,7 +245,7 @@ class ActionClient:
         _check_seconds("stall_timeout_s", stall_timeout_s, allow_none=False)
         waiter = _Waiter(self._runner, timeout, stall_timeout_s)
         handle_future = self.send_goal_async(goal, feedback_callback)
-        handle: ClientGoalHandle | None = None
+        handle: ClientGoalHandle[GoalT, ResultT] | None = None
         try:
             handle = waiter.wait(
                 handle_future,
@@ -237,7 +257,7 @@ class ActionClient:
                 ),
                 f"the goal request to '{self.action_name}'",
             )
-            if not handle.accepted:
+            if handle.rejection is not None:  # rejected (accepted is False)
                 raise GoalRejectedError(handle.goal_id, handle.action_name, handle.rejection)
             return waiter.wait(
                 handle.get_result_async(),

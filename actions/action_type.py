@@ -16,7 +16,7 @@ import re
 from collections.abc import Callable, Iterable
 from dataclasses import KW_ONLY, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar, overload
 
 from actions.action_definition import parse_action_file
 from actions.message_schema import check_message_class, message_class
@@ -31,9 +31,18 @@ _PACKAGE_NAME = re.compile(r"[a-z][a-z0-9_]*$")
 _INTERFACE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*$")
 _SECTIONS = ("Goal", "Result", "Feedback")
 
+#: An action's goal, result and feedback classes, for type checkers: ``HIGH_FIVE.Goal`` is
+#: ``type[HighFiveGoal]``, so a misspelt field is a type error.
+GoalT = TypeVar("GoalT")
+ResultT = TypeVar("ResultT")
+FeedbackT = TypeVar("FeedbackT")
+_G = TypeVar("_G")
+_R = TypeVar("_R")
+_F = TypeVar("_F")
+
 
 @dataclass(frozen=True)
-class ActionType:
+class ActionType(Generic[GoalT, ResultT, FeedbackT]):
     """An action interface: its name and message types.
 
     Made from its ``.action`` file with :meth:`from_file`, which keeps the classes in step
@@ -51,9 +60,9 @@ class ActionType:
     """
 
     name: str
-    goal_type: type
-    result_type: type
-    feedback_type: type
+    goal_type: type[GoalT]
+    result_type: type[ResultT]
+    feedback_type: type[FeedbackT]
     _: KW_ONLY
     package: str
     failure_result: Callable[[str], Any] | None = None
@@ -86,6 +95,23 @@ class ActionType:
                 f"received {self.failure_result!r}"
             )
 
+    @overload
+    @classmethod
+    def from_file(
+        cls, path: str | Path, *, package: str, goal_type: type[_G], result_type: type[_R],
+        feedback_type: type[_F], failure_result: Callable[[str], Any] | None = None,
+        types: Iterable[type[Message]] = (),
+    ) -> ActionType[_G, _R, _F]: ...
+
+    @overload
+    @classmethod
+    def from_file(
+        cls, path: str | Path, *, package: str, goal_type: None = None,
+        result_type: None = None, feedback_type: None = None,
+        failure_result: Callable[[str], Any] | None = None,
+        types: Iterable[type[Message]] = (),
+    ) -> ActionType[Any, Any, Any]: ...
+
     @classmethod
     def from_file(
         cls,
@@ -97,7 +123,7 @@ class ActionType:
         feedback_type: type | None = None,
         failure_result: Callable[[str], Any] | None = None,
         types: Iterable[type[Message]] = (),
-    ) -> ActionType:
+    ) -> ActionType[Any, Any, Any]:
         """The action defined by the ``.action`` file at ``path``, named after the file.
 
         A message class given is checked against its section of the file (so that classes
@@ -145,17 +171,17 @@ class ActionType:
                    failure_result=failure_result, interface_path=path)
 
     @property
-    def Goal(self) -> type:  # rclpy spelling: FollowJointTrajectory.Goal
+    def Goal(self) -> type[GoalT]:  # rclpy spelling: FollowJointTrajectory.Goal
         """The goal class, as in ``FOLLOW_JOINT_TRAJECTORY.Goal(trajectory=...)``."""
         return self.goal_type
 
     @property
-    def Result(self) -> type:
+    def Result(self) -> type[ResultT]:
         """The result class."""
         return self.result_type
 
     @property
-    def Feedback(self) -> type:
+    def Feedback(self) -> type[FeedbackT]:
         """The feedback class."""
         return self.feedback_type
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import copy
 from concurrent.futures import Future
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from actions.goal_status import GoalStatus
 from wbc.core.errors import WbcError
@@ -41,7 +41,12 @@ class CancelSubmitter(Protocol):
         ...
 
 
-class ClientGoalHandle:
+#: The goal's and the result's classes (``HighFiveGoal``, ``HighFiveResult``).
+GoalT = TypeVar("GoalT")
+ResultT = TypeVar("ResultT")
+
+
+class ClientGoalHandle(Generic[GoalT, ResultT]):
     """The client's view of a goal: id, acceptance, live status, result and cancellation.
 
     Obtained from the future returned by ``ActionClient.send_goal_async``. Thread-safe. The
@@ -64,12 +69,13 @@ class ClientGoalHandle:
         return self._record.server.action_name
 
     @property
-    def goal(self) -> Any:
+    def goal(self) -> GoalT:
         """A copy of the goal as the server received it (validated and normalised).
 
         A copy, so that changing it cannot change the goal the server is running.
         """
-        return copy.deepcopy(self._record.goal)
+        goal: GoalT = copy.deepcopy(self._record.goal)
+        return goal
 
     @property
     def accepted(self) -> bool:
@@ -86,7 +92,7 @@ class ClientGoalHandle:
         """The latest status (``UNKNOWN`` for a rejected goal)."""
         return self._record.status
 
-    def get_result_async(self) -> Future[WrappedResult]:
+    def get_result_async(self) -> Future[WrappedResult[ResultT]]:
         """A future resolved with status and result on the tick the goal ends.
 
         Every call returns the same future; once done it keeps the result.
@@ -96,7 +102,8 @@ class ClientGoalHandle:
         """
         if self._record.rejection is not None:
             raise GoalRejectedError(self.goal_id, self.action_name, self._record.rejection)
-        return self._record.result_future
+        future: Future[WrappedResult[ResultT]] = self._record.result_future
+        return future
 
     def cancel_goal_async(self) -> Future[CancelResponse]:
         """Ask to cancel the goal; the future resolves on the next tick.

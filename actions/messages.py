@@ -64,11 +64,13 @@ class Message:
     def __post_init__(self) -> None:
         self._normalise(type(self).__name__)
 
-    def __setattr__(self, name: str, value: Any) -> None:
-        try:
-            object.__setattr__(self, name, value)
-        except AttributeError:
-            raise UnknownFieldError(no_such_field(type(self), name)) from None
+    if not typing.TYPE_CHECKING:  # hidden from type checkers: a misspelt field a type error
+
+        def __setattr__(self, name: str, value: Any) -> None:
+            try:
+                object.__setattr__(self, name, value)
+            except AttributeError:
+                raise UnknownFieldError(no_such_field(type(self), name)) from None
 
     def validated_copy(self) -> typing.Self:
         """A deep copy with every field checked and normalised, as at keyword construction.

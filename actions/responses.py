@@ -11,10 +11,14 @@ from __future__ import annotations
 import numbers
 from dataclasses import dataclass
 from enum import Enum, IntEnum
-from typing import Any
+from typing import Generic, TypeVar
 
 from actions.goal_status import GoalStatus
 from wbc.core.errors import ConfigurationError
+
+#: The action's feedback and result classes (``HighFiveFeedback``, ``HighFiveResult``).
+FeedbackT = TypeVar("FeedbackT")
+ResultT = TypeVar("ResultT")
 
 
 class GoalResponse(Enum):
@@ -96,7 +100,7 @@ class CancelResponse:
 
 
 @dataclass(frozen=True)
-class FeedbackMessage:
+class FeedbackMessage(Generic[FeedbackT]):
     """What a client's feedback callback receives (as in rclpy: ``msg.feedback``).
 
     Attributes:
@@ -105,11 +109,11 @@ class FeedbackMessage:
     """
 
     goal_id: str
-    feedback: Any
+    feedback: FeedbackT
 
 
 @dataclass(frozen=True)
-class WrappedResult:
+class WrappedResult(Generic[ResultT]):
     """A finished goal: its terminal status and the action's result message.
 
     Attributes:
@@ -120,4 +124,4 @@ class WrappedResult:
 
     goal_id: str
     status: GoalStatus
-    result: Any
+    result: ResultT

@@ -11,6 +11,7 @@ action type all the same (:data:`ACTION_TYPES`), its classes built from the file
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypeVar
 
 from actions.action_type import INTERFACES_DIR, ActionType, action_types_in
 from actions.messages import Message
@@ -125,10 +126,14 @@ class SitFeedback(PhaseFeedback):
     __slots__ = ()
 
 
+_G = TypeVar("_G", bound=Message)
+_R = TypeVar("_R", bound=BehaviourResult)
+_F = TypeVar("_F", bound=PhaseFeedback)
+
+
 def _go2_action(
-    name: str, goal_type: type, result_type: type[BehaviourResult],
-    feedback_type: type[PhaseFeedback],
-) -> ActionType:
+    name: str, goal_type: type[_G], result_type: type[_R], feedback_type: type[_F],
+) -> ActionType[_G, _R, _F]:
     """An action of ``go2_interfaces`` whose declared classes are checked against its file."""
     return ActionType.from_file(
         INTERFACES_DIR / f"{name}.action", package=GO2_INTERFACES_PACKAGE, goal_type=goal_type,
