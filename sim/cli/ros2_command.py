@@ -65,7 +65,7 @@ def add_ros2_options(group: Any) -> None:
                             "(default: none, /high_five)")
     group.add_argument("--ros-args", nargs=argparse.REMAINDER, default=[], metavar="ARG",
                        help="ROS 2 arguments, last on the line: --remap FROM:=TO, -p NAME:="
-                            "VALUE, --log-level LEVEL")
+                            "VALUE, --log-level LEVEL (default: none)")
 
 
 def add_ros2_commands(sub: Any) -> None:
@@ -117,7 +117,7 @@ def add_ros2_commands(sub: Any) -> None:
                             help="with --ros2: the node's namespace (default: none)")
     send_group.add_argument("--ros-args", nargs=argparse.REMAINDER, default=[], metavar="ARG",
                             help="with --ros2: ROS 2 arguments, last (e.g. --remap "
-                                 "high_five:=wave)")
+                                 "high_five:=wave; default: none)")
     simulate = send.get_default("run")
 
     def send_goal(args: argparse.Namespace) -> int:
