@@ -304,10 +304,12 @@ class _Waiter:
             now_s = self._runner.now_s
             if self._start_sim_s is None:
                 self._start_sim_s = now_s
+            start_s = self._start_sim_s
             if (
                 self._timeout is not None
                 and now_s is not None
-                and now_s - self._start_sim_s >= self._timeout
+                and start_s is not None
+                and now_s - start_s >= self._timeout
             ):
                 raise on_timeout()
             ticks = self._runner.tick_count

@@ -156,7 +156,7 @@ class ActionType(Generic[GoalT, ResultT, FeedbackT]):
         except OSError as err:
             raise ConfigurationError(f"{path}: cannot read the action file: {err}") from err
         known = {message.__name__: message for message in types}
-        classes = []
+        classes: list[type[Any]] = []
         for section, declared, spec in zip(_SECTIONS, (goal_type, result_type, feedback_type),
                                            definition, strict=True):
             if declared is None:

@@ -40,6 +40,7 @@ import dataclasses
 import functools
 import numbers
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -129,8 +130,7 @@ class Message:
         raise ConfigurationError(f"{where} must be a {cls.__name__}; received {_describe(value)}")
 
 
-@functools.cache
-def field_types(cls: type) -> dict[str, Any]:
+def _field_types(cls: type) -> dict[str, Any]:
     """The type of every field of the message class ``cls``, in field order.
 
     E.g. ``{"target_height": float, "hold_seconds": int}`` for :class:`HighFiveGoal`;
@@ -138,6 +138,11 @@ def field_types(cls: type) -> dict[str, Any]:
     """
     hints = typing.get_type_hints(cls)
     return {f.name: hints[f.name] for f in dataclasses.fields(cls)}
+
+
+#: :func:`_field_types`, cached per class. Typed as a plain function: to mypy the cache takes
+#: only hashable arguments, and it does not count a class as one when its instances are not.
+field_types: Callable[[type], dict[str, Any]] = functools.cache(_field_types)
 
 
 def no_such_field(cls: type, name: Any, where: str | None = None) -> str:
@@ -184,7 +189,7 @@ def _coerce(hint: Any, value: Any, where: str, *, copy: bool) -> Any:
             except OverflowError:  # an int beyond the float range
                 raise ConfigurationError(
                     f"{where} must be a real number within the float range (about +-1.8e308); "
-                    f"received an integer of {len(str(abs(int(value))))} digits"
+                    f"received an integer of {len(str(abs(value)))} digits"
                 ) from None
         raise ConfigurationError(f"{where} must be a real number; received {_describe(value)}")
     if hint is int:

@@ -26,7 +26,7 @@ declares by the protocols of :mod:`actions.robot.robot_capabilities`.
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import Protocol, cast, runtime_checkable
 
 import numpy as np
 
@@ -285,7 +285,7 @@ class MappedRobot:
             raise ConfigurationError(
                 f"state: {type(self.robot).__name__} reports sensors only, not its exact "
                 "state; estimate it (the default) instead of 'truth'")
-        q, v = self.robot.read_state()
+        q, v = cast(TrueState, self.robot).read_state()  # has_true_state: it is one
         q = as_vector("q", q, 19, finite=False)
         v = as_vector("v", v, 18, finite=False)
         if not self._same_order:

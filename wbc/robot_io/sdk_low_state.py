@@ -91,8 +91,9 @@ class SdkLowState:
             motors = [low_state.motor_state[k] for k in range(SDK_LEG_MOTORS)]
             return cls(
                 imu_quaternion_wxyz=imu.quaternion, gyroscope_rad_s=imu.gyroscope,
-                accelerometer_m_s2=imu.accelerometer, q=[m.q for m in motors],
-                dq=[m.dq for m in motors], tau_est=[m.tau_est for m in motors],
+                accelerometer_m_s2=imu.accelerometer, q=np.array([m.q for m in motors]),
+                dq=np.array([m.dq for m in motors]),
+                tau_est=np.array([m.tau_est for m in motors]),
                 foot_force=low_state.foot_force, tick=int(getattr(low_state, "tick", 0)),
             )
         except (AttributeError, IndexError, TypeError) as err:
@@ -220,7 +221,7 @@ class SdkLowState:
             imu_quaternion_wxyz=qpos[3:7], gyroscope_rad_s=qvel[3:6],
             accelerometer_m_s2=accelerometer_m_s2, q=_SDK.to_other(q[7:]),
             dq=_SDK.to_other(v[6:]), tau_est=_SDK.to_other(tau),
-            foot_force=[feet[LEGS.index(leg)] for leg in UNITREE_SDK_LEGS],
+            foot_force=np.array([feet[LEGS.index(leg)] for leg in UNITREE_SDK_LEGS]),
         )
 
 

@@ -219,7 +219,7 @@ class SdkMotorCommand:
         Raises:
             ConfigurationError: ``low_cmd`` has no ``motor_cmd`` list of 20 entries.
         """
-        motors = getattr(low_cmd, "motor_cmd", None)
+        motors: Any = getattr(low_cmd, "motor_cmd", None)
         if not hasattr(motors, "__len__") or len(motors) != SDK_MOTOR_SLOTS:
             raise ConfigurationError(
                 f"low_cmd: expected a LowCmd_ with a motor_cmd list of {SDK_MOTOR_SLOTS} "
