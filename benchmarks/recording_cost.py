@@ -133,11 +133,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rate", type=int, default=1000, help="control rate [Hz]")
     parser.add_argument("--repeats", type=int, default=2, help="rounds of the three modes")
     parser.add_argument("--json", type=Path, help="write the rows here")
+    parser.add_argument("--modes", nargs="+", choices=MODES, default=list(MODES),
+                        help="the recordings to compare (default: all three)")
     args = parser.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for r in range(args.repeats):
-            for mode in MODES:
+            for mode in args.modes:
                 workdir = Path(tmp) / f"{r}-{mode}"
                 workdir.mkdir()
                 row = run_once(workdir, mode, args.rate)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from actions.robot.run_recording import RunRecording, Snapshot
+from actions.robot.tick_log import FootTargets
 from wbc.model.description import LEGS
 from wbc.model.support_polygon import shrunk_signed_distance
 
@@ -37,6 +38,8 @@ class RecordingHook:
         self.phase_of = phase_of
         self.leg = leg
         self._truth = loop.true_state()
+        controller = loop.controller  # once: an isinstance on a protocol costs microseconds
+        self._targets = controller if isinstance(controller, FootTargets) else None
 
     def __call__(self, loop: ControlLoop, out: ControlOutput) -> None:
         from sim.episode_metrics import LOADED_FORCE_N
@@ -55,8 +58,8 @@ class RecordingHook:
         stance = tuple(bool(s) for s in controller.schedule.stance)
         targets = np.full((len(LEGS), 3), np.nan)
         for k, leg in enumerate(LEGS):
-            if not stance[k]:
-                target = controller.foot_target(leg)
+            if not stance[k] and self._targets is not None:
+                target = self._targets.foot_target(leg)
                 if target is not None:
                     targets[k] = target
         estimate = None if loop.estimator is None else loop.estimator.estimate

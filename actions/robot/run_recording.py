@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -102,7 +103,11 @@ def _array(a: np.ndarray | None) -> list | None:
         return None
     a = np.asarray(a, dtype=float).round(6)
     finite = np.isfinite(a)
-    return a.tolist() if finite.all() else np.where(finite, a, None).tolist()
+    if finite.all():
+        return a.tolist()
+    cells = a.astype(object)
+    cells[~finite] = None
+    return cells.tolist()
 
 
 def _arrow_rotation(direction: np.ndarray) -> Quaternion:
@@ -169,7 +174,8 @@ class RunRecording:
             return
         self._queue.append(snapshot)
 
-    def drain(self, time_left_s: float = math.inf, *, clock=time.perf_counter) -> int:
+    def drain(self, time_left_s: float = math.inf, *,
+              clock: Callable[[], float] = time.perf_counter) -> int:
         """Log queued snapshots, a step (a channel's message or two) at a time, while the
         next step is expected to fit in ``time_left_s`` [s]; returns the snapshots finished.
 
