@@ -298,7 +298,7 @@ class _Waiter:
         self,
         future: Future[T],
         on_timeout: Callable[[], ActionTimeoutError],
-        spinner: Callable[[], None],
+        spinner: Callable[[], object],
     ) -> T:
         while not future.done():
             now_s = self._runner.now_s

@@ -61,7 +61,7 @@ class ActionRunner:
         self,
         *,
         busy_policy: BusyPolicy = BusyPolicy.REJECT,
-        spinner: Callable[[], None] | None = None,
+        spinner: Callable[[], object] | None = None,
         event_log_maxlen: int | None = 100_000,
     ) -> None:
         if not isinstance(busy_policy, BusyPolicy):
@@ -79,7 +79,7 @@ class ActionRunner:
         self._next_id = 1
         self._tick_count = 0
         self._shut_down = False
-        self._spinner: tuple[Callable[[], None], int] | None = None
+        self._spinner: tuple[Callable[[], object], int] | None = None
         if spinner is not None:
             self.set_spinner(spinner)
 
@@ -121,7 +121,7 @@ class ActionRunner:
         with self._lock:
             return tuple(sorted(self._servers))
 
-    def set_spinner(self, spin_once: Callable[[], None] | None) -> None:
+    def set_spinner(self, spin_once: Callable[[], object] | None) -> None:
         """Register the control loop's ``spin_once()`` for blocking calls on this thread.
 
         ``spin_once`` must advance the loop by one control period and call :meth:`tick`.
@@ -137,7 +137,7 @@ class ActionRunner:
         with self._lock:
             self._spinner = None if spin_once is None else (spin_once, threading.get_ident())
 
-    def spinner_for_current_thread(self) -> Callable[[], None] | None:
+    def spinner_for_current_thread(self) -> Callable[[], object] | None:
         """The registered ``spin_once`` if this thread registered it, else ``None``."""
         with self._lock:
             spinner = self._spinner

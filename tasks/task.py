@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 import numba
 import numpy as np
@@ -282,7 +282,7 @@ class Task:
                 desired[:] = self.gains[0] * self.error + self.gains[1] * self.error_rate
                 desired += self.reference[2]
                 return
-            call = self._call
+            call = cast("tuple[Any, ...]", self._call)  # _bind set it
         call[1]()
 
     def prepare(self, kinematics: RobotKinematics) -> None:

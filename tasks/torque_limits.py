@@ -10,6 +10,7 @@ from tasks import constraint_kernels
 from tasks.constraint import Constraint, ConstraintBlock
 from tasks.contact_task import ContactTask
 from tasks.variable_layout import VariableLayout
+from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_vector
 
 if TYPE_CHECKING:
@@ -30,8 +31,12 @@ class TorqueLimits(Constraint):
             contacts: The contact points' task (its Jacobian maps the forces to torques).
             tau_max: Torque limit of each actuated joint [N m] (nv - 6,).
         """
+        if contacts.nv is None:  # a ContactTask knows it from its model
+            raise ConfigurationError("TorqueLimits: the contact task does not know the "
+                                     "robot's nv; build it with the robot's model")
         self.contacts = contacts
-        self._tau_max = as_vector("tau_max", tau_max, contacts.nv - 6)
+        self._joints = contacts.nv - 6
+        self._tau_max = as_vector("tau_max", tau_max, self._joints)
 
     @property
     def tau_max(self) -> np.ndarray:
@@ -41,7 +46,7 @@ class TorqueLimits(Constraint):
     @tau_max.setter
     def tau_max(self, value: np.ndarray) -> None:
         # In place: the bound kernel calls of every layout read this array.
-        self._tau_max[:] = as_vector("tau_max", value, self.contacts.nv - 6)
+        self._tau_max[:] = as_vector("tau_max", value, self._joints)
 
     def rows(self, layout: VariableLayout) -> int:
         return layout.nv - 6

@@ -8,7 +8,13 @@ import pytest
 
 from sim.cli import EXIT_USAGE, main
 from sim.control_loop import ControlLoop
-from wbc import ConfigurationError, Go2Description, WholeBodyController
+from wbc import (
+    ConfigurationError,
+    ControllerConfig,
+    Go2Description,
+    UnknownNameError,
+    WholeBodyController,
+)
 
 TRUTH_ONLY = ("not used with --state truth (the controller reads the simulator's exact state: "
               "no estimator runs, no sensor is read); drop it, or use --state estimate "
@@ -82,3 +88,17 @@ def test_truth_refuses_what_it_would_ignore(argv: list[str], message: str,
     captured = capsys.readouterr()
     assert captured.out == ""
     assert captured.err.splitlines() == [f"go2-wbc high-five: error: {message}{TRUTH_ONLY}"]
+
+
+@pytest.mark.parametrize("attempt", [
+    lambda: ControllerConfig.path_of("RANGES"),
+    lambda: ControllerConfig().with_values({"shaping.PER_JOINT_TYPE": 1}),
+    lambda: ControllerConfig(gains={"RANGES": 1}),
+    lambda: ControllerConfig(shaping={"PER_JOINT_TYPE": ("x",)}),
+])
+def test_the_valid_controller_parameters_are_fields_not_class_tables(attempt) -> None:
+    with pytest.raises(UnknownNameError) as err:
+        attempt()
+    listed = str(err.value).split("; valid ", 1)[1]
+    assert "RANGES" not in listed and "PER_JOINT_TYPE" not in listed
+    assert "com_kp" in listed or "stance_kp" in listed or "solver" in listed

@@ -215,7 +215,7 @@ class RobotLoop:
                                      "(state='truth'), it has no estimator")
         if not estimator.started:
             problem = estimator.start_problem(record)
-            if problem:
+            if problem or record is None:  # no record: start_problem names why
                 self.fallback.wait(problem, self.robot.time_s)
                 return estimator.estimate.q.copy(), estimator.estimate.v.copy()
             estimate = estimator.reset(record)

@@ -27,6 +27,7 @@ class _Part:
     RANGES: ClassVar[dict[str, _Range]] = {}
     #: Fields that hold one value per joint type (hip, thigh, calf).
     PER_JOINT_TYPE: ClassVar[tuple[str, ...]] = ()
+    __dataclass_fields__: ClassVar[dict[str, Any]]  # every part is a dataclass
 
     def __post_init__(self) -> None:
         type(self)._check(self)
@@ -34,7 +35,7 @@ class _Part:
     @classmethod
     def _check(cls, config: Any) -> None:
         """Check the fields of ``config``, one of this part."""
-        for f in fields(cls):  # type: ignore[arg-type]
+        for f in fields(cls):
             if f.name in cls.PER_JOINT_TYPE:
                 _check_per_joint_type(config, f.name, cls.RANGES[f.name])
             else:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import NamedTuple, TypedDict
 
 import numba
 import numpy as np
@@ -20,6 +20,18 @@ JOINT_TYPES = ("hip", "thigh", "calf")
 def joint_types(joint_names: Sequence[str]) -> list[int]:
     """Each joint's type (0 hip, 1 thigh, 2 calf), from its name (``FR_thigh_joint``)."""
     return [JOINT_TYPES.index(name.split("_")[1]) for name in joint_names]
+
+
+class MotorArrays(TypedDict):
+    """One tick's command arrays (joints in the description's order), as
+    :class:`~wbc.controller.control_output.ControlOutput` takes them by keyword."""
+
+    q_des: np.ndarray
+    dq_des: np.ndarray
+    kp: np.ndarray
+    kd: np.ndarray
+    tau_ff: np.ndarray
+    tau: np.ndarray
 
 
 class JointShaping(NamedTuple):
@@ -171,7 +183,7 @@ class MotorCommandShaper:
             joints, cfg.stance_leak_time_s if stance else cfg.swing_leak_time_s)
 
     def shape(self, q: np.ndarray, dq: np.ndarray, qdd: np.ndarray,
-              tau_qp: np.ndarray) -> dict[str, np.ndarray]:
+              tau_qp: np.ndarray) -> MotorArrays:
         """The command's arrays (new ones, owned by the caller) for one solved tick.
 
         Args:

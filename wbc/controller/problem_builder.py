@@ -169,7 +169,7 @@ class ProblemBuilder:
         if not self.reduce or self.leg_columns is None:
             return False
         declared = [c for c in self.constraints if c.eliminable_as is not None]
-        kinds = [c.eliminable_as for c in declared]
+        kinds = [c.eliminable_as for c in declared if c.eliminable_as is not None]
         return (sorted(kinds, key=lambda k: k.value) == sorted(Elimination, key=lambda k: k.value)
                 and all(getattr(c, "contacts", None) is self.contact_task for c in declared))
 
@@ -330,8 +330,8 @@ class ProblemBuilder:
         arrays); ``None`` without one or when it fails (then solve and :meth:`accept`)."""
         plan = self._current
         program = plan.solve_program(backend) if self.reduced and plan is not None else None
-        if program is None or not program.run():
-            if program is not None:
+        if plan is None or program is None or not program.run():
+            if plan is not None and program is not None:
                 plan.forget_solve()  # the failure path sets the backend up anew
             return None
         return plan.x, plan.tau.copy(), plan.forces.copy()

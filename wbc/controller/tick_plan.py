@@ -167,7 +167,8 @@ class TickPlan:
                 full.H, full.f))
         full_cost.append(bind_compiled(cost_kernels.mirror_upper, full.H))
         self.full_cost: list[Callable[[], None]] = full_cost
-        gone = eliminated if self.reduction is not None else [False] * len(constraints)
+        gone: Sequence[bool] = (eliminated if self.reduction is not None and eliminated is not None
+                                else [False] * len(constraints))
         self.setup()
         self._kinematics, self._contact_task, self._gone = kinematics, contact_task, gone
         self._programs: dict[tuple[Task, ...], CompiledProgram] = {}
@@ -190,7 +191,7 @@ class TickPlan:
         returns what it does). Made once for each set of active tasks.
         """
         last = self._last_program
-        if last[0] is tasks:  # the tick's case: the same tuple as the last tick's
+        if last[0] is tasks and last[1] is not None:  # the tick's case: the last tick's tuple
             return last[1]
         program = self._programs.get(tasks)
         if program is None:

@@ -343,15 +343,15 @@ class WholeBodyController:
         if solved is not None:
             x, tau_qp, forces = solved
         else:
-            result: QpResult | None = self.backend.solve(problem)
+            result = self.backend.solve(problem)
             t3 = time.perf_counter()
             if not result.found:
                 self.failures += 1
-                # A fresh workspace for the next tick: the solver's may hold a bad state.
-                self.backend.setup(problem)
-                result, status, message, group = self.recovery.recover(result)
-                if result is None:
+                self.backend.setup(problem)  # a fresh workspace: the solver's may be bad now
+                recovered, status, message, group = self.recovery.recover(result)
+                if recovered is None:
                     return self._fallback(v, message, t0, group=group)
+                result = recovered
             forces = np.empty((len(self.legs), 3))
             x, tau_qp = builder.accept(result.x, forces)
             if status is not ControlStatus.OK:

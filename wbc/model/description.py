@@ -48,7 +48,7 @@ def _find_go2_folder() -> Path:
     for entry in dist.files or ():
         path = str(entry).replace("\\", "/")
         if path.endswith(f"{_ROBOT_DIR}/urdf/go2.urdf"):
-            urdf = Path(dist.locate_file(entry))
+            urdf = Path(str(dist.locate_file(entry)))
             if urdf.is_file():
                 return urdf.parent.parent
     raise DescriptionNotFoundError(

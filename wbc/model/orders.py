@@ -73,6 +73,7 @@ class Orders:
 
     joint_names: tuple[str, ...]
     leg_names: tuple[str, ...]
+    _hash: int
     name: str
 
     def __init__(self, joint_names: Sequence[str], leg_names: Sequence[str], *,
