@@ -17,10 +17,10 @@ DEFAULT_PORT = 8765
 #: What a goal command's help says of them (its option list stays at 20 lines).
 RECORDING_HELP = """\
 recording (docs/recording.md):
-  --mcap FILE.mcap   record the run for Foxglove or Lichtblick (transforms, joint states,
-                     targets, contact forces, plots, timing, the printed lines, the URDF)
-  --foxglove [PORT]  serve the same channels live on ws://127.0.0.1:PORT (default 8765;
-                     0: any free port); the run is then paced to the wall clock
+  with --mcap FILE.mcap, the run is recorded for Foxglove or Lichtblick (transforms,
+  joint states, targets, contact forces, plots, timing, the printed lines, the URDF);
+  with --foxglove [PORT], the same channels are served live on ws://127.0.0.1:PORT
+  (default 8765; 0: any free port), the run paced to the wall clock;
   go2-wbc replay FILE.mcap plays a recording back (viewer, --foxglove, --plot)
 
 """
