@@ -43,6 +43,12 @@ fi
 # pyright read from outside the checkout (setuptools' default editable install is an import
 # hook they cannot see: "Cannot find implementation or library stub for module 'wbc'").
 .venv/bin/python -m pip install -q -e '.[test,scale]' --config-settings editable_mode=compat
+# pyright (the npm registry's, pinned) for tests/test_typed_messages.py, which runs it on a
+# user's scripts from outside the checkout; skipped (the test says so) where npm is missing.
+if command -v npm >/dev/null 2>&1 && [ ! -x .venv/node_modules/.bin/pyright ]; then
+  npm install --silent --no-audit --no-fund --prefix .venv pyright@1.1.414 \
+    || echo "setup: could not install pyright; its test will be skipped"
+fi
 .venv/bin/python -c "import pinocchio, placo, mujoco, qpsolvers, daqp; print('setup: ok, pinocchio', pinocchio.__version__, 'placo imports, mujoco', mujoco.__version__)"
 # Compile the numba kernels once now, not on the first run (about 80 s on 2 cores): a high
 # five with each estimator, in two processes at once, compiles the controller's, the tasks',

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib.util
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -89,3 +90,38 @@ def test_the_docs_client_examples_pass(mypy_outside: tuple[str, Path]) -> None:
     blocks = sum(len(_BLOCK.findall(page.read_text())) for page in PAGES)
     assert blocks >= 4  # the README's two, the actions page's three
     assert f"Found 3 errors in 1 file (checked {blocks + 1} source files)" in output, output
+
+
+def pyright_command() -> list[str] | None:
+    """pyright as ``make`` installs it (npm, into .venv), or on PATH; None without."""
+    local = ROOT / ".venv" / "node_modules" / ".bin" / "pyright"
+    if local.exists():
+        return [str(local)]
+    found = shutil.which("pyright")
+    return [found] if found else None
+
+
+@pytest.mark.slow  # pyright over the library's types: 10 to 60 s
+def test_pyright_outside_the_checkout_catches_the_mistakes_and_passes_the_clients(
+        tmp_path: Path) -> None:
+    """The client examples (the README's first Python block, docs/actions.md's) pass pyright;
+    the misspelt script's three mistakes are its three errors."""
+    command = pyright_command()
+    if command is None:
+        pytest.skip("pyright is not installed (make installs it from npm when npm exists)")
+    (tmp_path / "misspelt.py").write_text(MISSPELT)
+    readme, actions = (_BLOCK.findall(page.read_text()) for page in PAGES)
+    clients = [readme[0], *actions]
+    for k, block in enumerate(clients, start=1):
+        (tmp_path / f"client_{k}.py").write_text(block)
+    done = subprocess.run(
+        [*command, "--pythonpath", sys.executable, "misspelt.py",
+         *(f"client_{k}.py" for k in range(1, len(clients) + 1))],
+        cwd=tmp_path, capture_output=True, text=True, check=False, timeout=600)
+    errors = [line.strip() for line in done.stdout.splitlines() if " - error: " in line]
+    assert [line.split(" - error: ")[0].rsplit("/", 1)[-1] for line in errors] == [
+        "misspelt.py:7:22", "misspelt.py:8:6", "misspelt.py:10:21"], done.stdout
+    assert 'No parameter named "target_heigth"' in errors[0]
+    assert 'Cannot assign to attribute "hold_secs"' in errors[1]
+    assert 'Cannot access attribute "mesage"' in errors[2]
+    assert "3 errors, 0 warnings" in done.stdout
