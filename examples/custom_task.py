@@ -37,7 +37,9 @@ class BaseHeightTask(Task):
         self.drift[0] = kinematics.frame_drift[i, 2]
 
 
-@numba.njit(cache=True)
+# No disk cache: numba cannot reload a cached function from a module imported by its path
+# (as the tests import this file); the tick's program that calls it is cached all the same.
+@numba.njit
 def base_height_rows(frame_position, frame_velocity, frame_jacobian, frame_drift, index,
                      reference, gains, error, error_rate, jacobian, drift, desired):
     """What :meth:`BaseHeightTask.compute` writes, and the PD law, in compiled code."""

@@ -217,9 +217,8 @@ def _kernel_files(values: Any) -> set[str]:
             continue
         callees = [v for v in function.__globals__.values() if hasattr(v, "py_func")]
         for kernel in (function, *(c.py_func for c in callees)):
-            module_file = getattr(sys.modules.get(kernel.__module__), "__file__", None)
-            if module_file:
-                files.add(module_file)
+            if os.path.isfile(kernel.__code__.co_filename):  # a module imported by path too
+                files.add(kernel.__code__.co_filename)
     return files
 
 
