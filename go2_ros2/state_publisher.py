@@ -15,6 +15,7 @@ from __future__ import annotations
 import array
 import math
 import threading
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -63,9 +64,11 @@ class StatePublisher:
         node: The rclpy node (topic names relative: the namespace and remaps apply).
         sim_time: Stamp with the robot's time and publish it on ``/clock`` (the simulated
             robot); otherwise stamp with the node's clock.
+        on_start: Called first in the publisher's thread (its scheduling).
     """
 
-    def __init__(self, node: Node, *, sim_time: bool) -> None:
+    def __init__(self, node: Node, *, sim_time: bool,
+                 on_start: Callable[[], None] | None = None) -> None:
         self.node = node
         self.sim_time = sim_time
         self.joint_names = list(DESCRIPTION_ORDERS.joint_names)
@@ -92,6 +95,7 @@ class StatePublisher:
         self._odom_msg = Odometry()
         self._odom_msg.header.frame_id = ODOM_FRAME
         self._odom_msg.child_frame_id = BASE_FRAME
+        self._on_start = on_start
         self._thread = threading.Thread(target=self._run, name="ros2-state", daemon=True)
         self._thread.start()
 
@@ -115,6 +119,8 @@ class StatePublisher:
         self._wake.set()
 
     def _run(self) -> None:
+        if self._on_start is not None:
+            self._on_start()
         while True:
             self._wake.wait()
             self._wake.clear()

@@ -194,8 +194,10 @@ def start_ros2_node(args: argparse.Namespace, loop: Any, say: Any) -> Any:
         from go2_ros2.go2_node import Go2Node
     except ImportError as err:
         raise SystemExit(_missing_extra(err)) from err
+    # Its threads just below the control loop's SCHED_FIFO priority (when permitted).
     node = Go2Node(loop, node_name=args.node_name, namespace=args.namespace,
-                   ros_args=args.ros_args, sim_time=False)
+                   ros_args=args.ros_args, sim_time=False,
+                   thread_priority=max(args.rt_priority - 1, 0))
     node.start()
     say(f"ROS 2 node {node.node.get_fully_qualified_name()} (RMW {node.rmw_name}): actions "
         f"{', '.join(node.action_names)}; topics {', '.join(node.topic_names)}")
