@@ -12,23 +12,8 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from sim.episode import Episode
-
 #: The phase a goal ends in: the run stops on its tick, so its band is drawn past the end.
 COMPLETE = "complete"
-
-
-def run_caption(episode: Episode) -> str:
-    """The plot's second title line: the plant, the control rate, the state source, the
-    estimator and the sensors (``plant menagerie, control 1000 Hz; state estimated by inekf
-    from sensors go2, seed 0``)."""
-    head = f"plant {episode.plant_model.name}, control {episode.control_rate_hz:g} Hz"
-    if episode.state == "truth":
-        return f"{head}; state: the simulator's truth (no estimator)"
-    faults = "".join(f", fault {fault.kind} at {fault.at_s:g} s"
-                     for fault in episode.sensor_faults)
-    return (f"{head}; state estimated by {episode.estimator} from sensors "
-            f"{episode.sensor_model.name}, seed {episode.sensor_seed}{faults}")
 
 
 def support_switches(t: np.ndarray, forces: np.ndarray, *,
@@ -94,7 +79,8 @@ def plot_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = "")
     Args:
         arrays: :meth:`sim.run_recorder.TickRecorder.arrays` (or a recording's).
         title: The first title line (the action and its goal).
-        caption: The second (:func:`run_caption`: plant, rate, state source, estimator).
+        caption: The second (:func:`sim.cli.output.run_caption`: plant, rate, state
+            source, estimator).
     """
     import matplotlib
 

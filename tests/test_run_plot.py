@@ -9,8 +9,9 @@ import matplotlib
 import numpy as np
 import pytest
 
+from sim.cli.output import run_caption
 from sim.episode import Episode
-from sim.run_plot import plot_figure, run_caption, support_switches, write_plot
+from sim.run_plot import plot_figure, support_switches, write_plot
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt

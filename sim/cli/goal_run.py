@@ -15,12 +15,12 @@ import numpy as np
 from actions.go2.go2_actions import HIGH_FIVE_ACTION
 from sim.cli.episode_options import goal_episode
 from sim.cli.exit_codes import EXIT_INTERRUPTED, EXIT_UNAVAILABLE, exit_code
-from sim.cli.output import FeedbackPrinter, metrics_text, plant_line, state_line
+from sim.cli.output import FeedbackPrinter, metrics_text, plant_line, run_caption, state_line
 from sim.cli.recording_options import open_recording, recording_summary
 from sim.episode_loop import startup_objects_frozen
 from sim.episode_result import REJECTED, UNAVAILABLE, EpisodeListener, EpisodeResult
 from sim.episode_runner import EpisodeRunner, RenderingUnavailableError
-from sim.run_plot import run_caption, write_plot
+from sim.run_plot import write_plot
 from wbc.core.errors import ConfigurationError
 
 if TYPE_CHECKING:

@@ -36,6 +36,19 @@ def plant_line(episode: Episode) -> str:
     return line
 
 
+def run_caption(episode: Episode) -> str:
+    """The plot's second title line: the plant, the control rate, the state source, the
+    estimator and the sensors (``plant menagerie, control 1000 Hz; state estimated by inekf
+    from sensors go2, seed 0``)."""
+    head = f"plant {episode.plant_model.name}, control {episode.control_rate_hz:g} Hz"
+    if episode.state == "truth":
+        return f"{head}; state: the simulator's truth (no estimator)"
+    faults = "".join(f", fault {fault.kind} at {fault.at_s:g} s"
+                     for fault in episode.sensor_faults)
+    return (f"{head}; state estimated by {episode.estimator} from sensors "
+            f"{episode.sensor_model.name}, seed {episode.sensor_seed}{faults}")
+
+
 def metrics_text(summary: EpisodeSummary, *, raised: bool, estimated: bool) -> str:
     """The metrics' summary: a line, and one more on the estimate when the state is one."""
     s = summary
