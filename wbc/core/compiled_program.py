@@ -248,4 +248,15 @@ def _load(source: str, names: dict[str, Any]) -> Any:
     spec.loader.exec_module(module)  # type: ignore[union-attr]
     module.__dict__.update(names)
     sys.modules[module_name] = module
-    return numba.njit(cache=True)(module.program)
+    # numba's cache cannot reload code that calls a kernel of a module it cannot import by
+    # name (one loaded from its path): such a program is compiled in each process.
+    importable = all(_importable(getattr(v, "py_func", None)) for v in names.values())
+    return numba.njit(cache=importable)(module.program)
+
+
+def _importable(function: Any) -> bool:
+    """Whether a kernel's module is importable by its name (``None``: not a kernel)."""
+    if function is None:
+        return True
+    module = sys.modules.get(function.__module__)
+    return module is not None and module.__dict__ is function.__globals__
