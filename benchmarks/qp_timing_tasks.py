@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from tasks import FramePositionTask, Task
-from wbc import WholeBodyController
+from tasks.frame_position_task import FramePositionTask
+from tasks.task import Task
+from wbc.controller.whole_body_controller import WholeBodyController
 
 _EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "custom_task.py"
 
