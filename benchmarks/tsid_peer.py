@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from importlib.metadata import version
 
 import numpy as np
 import pinocchio as pin
@@ -34,9 +35,9 @@ import tsid
 def _sample(position: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray
             ) -> tsid.TrajectorySample:
     sample = tsid.TrajectorySample(len(position), len(velocity))
-    sample.pos(np.asarray(position, float))
-    sample.vel(np.asarray(velocity, float))
-    sample.acc(np.asarray(acceleration, float))
+    sample.value(np.asarray(position, float))
+    sample.derivative(np.asarray(velocity, float))
+    sample.second_derivative(np.asarray(acceleration, float))
     return sample
 
 
@@ -134,8 +135,10 @@ class TsidGo2:
                 self.stance[i] = stance
             if stance:
                 contact = self.contacts[frame]
+                # TSID checks 0 < min <= max on each call: lower the minimum first.
+                contact.setMinNormalForce(1e-9)
                 contact.setMaxNormalForce(max(bound, 1e-6))
-                contact.setMinNormalForce(min(float(p["min_normal_force_n"]), bound))
+                contact.setMinNormalForce(max(min(float(p["min_normal_force_n"]), bound), 1e-9))
             else:
                 resized |= self._set_foot_task(i, float(p["foot_weight"][k, i]))
                 self.feet[frame].setReference(_se3_sample(
@@ -183,7 +186,7 @@ def main(problem_path: str, result_path: str) -> None:
         peer.set_references(k)
         seconds[k], torques[k], normal[k] = peer.tick(k)
     json.dump({"seconds": seconds.tolist(), "torques": torques.tolist(),
-               "normal_force_n": normal.tolist(), "tsid_version": tsid.__version__,
+               "normal_force_n": normal.tolist(), "tsid_version": version("tsid"),
                "pinocchio_version": pin.__version__}, open(result_path, "w"))
 
 
