@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: install demo test test-slow install-ros2 test-ros2 bench bench-full docs lint typecheck
+.PHONY: install demo test test-slow install-ros2 test-ros2 bench bench-full docs lint typecheck tsid
 
 $(STAMP): pyproject.toml scripts/setup.sh
 	PYTHON=$(PYTHON) bash scripts/setup.sh
@@ -57,3 +57,23 @@ lint: $(STAMP)
 # tests/test_mypy_public.py runs it: 0 errors.
 typecheck: $(STAMP)
 	$(BIN)/python -m mypy --follow-imports=silent $$($(BIN)/python tests/public_modules.py)
+
+# TSID for the benchmark's optional row (benchmarks/tsid_row.py), in its own environment: the
+# registry has TSID's bindings but only libtsid's source, and the bindings built for another
+# libtsid crash (glibc "malloc assertion failure"), so both are built here against Pinocchio
+# 4.1 (not the project's 3.8, which PlaCo is built against). Nothing else uses it. About 35
+# minutes of compiling on 2 cores; CMEEL_JOBS sets the parallel jobs.
+TSID_VENV := .venv-tsid
+CMEEL_JOBS ?= 2
+$(TSID_VENV)/.installed-stamp:
+	$(PYTHON) -m venv $(TSID_VENV)
+	$(TSID_VENV)/bin/python -m pip install -q -U pip
+	CMEEL_JOBS=$(CMEEL_JOBS) $(TSID_VENV)/bin/python -m pip install -q tsid==1.10.0
+	$(TSID_VENV)/bin/python -m pip install -q "pin[build]==4.1.0" "eiquadprog[build]" \
+		"libtsid[build]==1.10.0" cmeel-eigen "cmeel[build]" cmake scipy \
+		--only-binary pin,eiquadprog,libtsid
+	CMEEL_JOBS=$(CMEEL_JOBS) $(TSID_VENV)/bin/python -m pip install -q --force-reinstall \
+		--no-deps --no-build-isolation --no-binary tsid tsid==1.10.0
+	touch $@
+
+tsid: $(TSID_VENV)/.installed-stamp

@@ -60,6 +60,7 @@ from benchmarks.lift_timing import (
 )
 from benchmarks.qp_timing_report import format_report, plot
 from benchmarks.reporting import json_safe, machine
+from benchmarks.tsid_row import run_tsid_row
 from wbc.backends.backend import available_backends, missing_backends
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.controller_config import ControllerConfig
@@ -168,6 +169,8 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
     ticks = 200 if quick else 500
     scaling = run_scaling(DEFAULT, WholeBodyController, ticks)
     scaling += run_scaling(PLACO, PlacoController, ticks)
+    log("  TSID, if an environment has it (make tsid)")
+    tsid = run_tsid_row(hold_s=hold_s, timing=QUICK_TIMING if quick else None)
 
     lift_desc = (f"{WARMUP_TICKS} standing warm-up ticks (excluded), then LegLift {LEG} to "
                  f"{HEIGHT_M:.2f} m, hold {hold_s:g} s, 1 kHz motor commands in MuJoCo")
@@ -214,6 +217,7 @@ def run(*, quick: bool, log: Callable[[str], None] = print) -> dict[str, Any]:
         "head_to_head": head_to_head,
         "recorded": recorded,
         "scaling": scaling,
+        "tsid": tsid,
         "episode_table": {"controller": f"{DEFAULT} backend",
                           "description": f"whole lift, hold {hold_s:g} s",
                           "sim_s": quality.sim_s,

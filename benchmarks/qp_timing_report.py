@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from benchmarks.lift_timing import STAGES
+from benchmarks.tsid_row import format_tsid_row
 
 
 def _fmt(value: Any, digits: int = 0) -> str:
@@ -19,7 +20,7 @@ def _fmt(value: Any, digits: int = 0) -> str:
 
 
 def format_report(report: dict[str, Any]) -> str:
-    """The three tables as plain text."""
+    """The tables as plain text."""
     m = report["machine"]
     versions = ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
     load = m["load_average_1_5_15_min"][0]
@@ -69,6 +70,8 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"{row['controller']:<16}{row['scenario']:<44}{row['qp']:<36}"
                      f"{row['ticks']:>6}{_fmt(row['median_us']):>8}{_fmt(row['p90_us']):>8}"
                      f"{_fmt(row['p99_us']):>8}{_fmt(row['cpu_median_us']):>8}")
+    if "tsid" in report:  # reports written before the TSID row have none
+        lines += ["", format_tsid_row(report["tsid"])]
     ep = report["episode_table"]
     lines += ["", f"Episode quality, {ep['controller']} ({ep['description']})"]
     for key, value in ep["metrics"].items():
