@@ -38,9 +38,10 @@ def add_replay_command(sub: Any) -> None:
                              f"{DEFAULT_PORT}; 0: any free port)")
     replay.add_argument("--plot", type=output_file(".png", ".pdf", ".svg"), metavar="FILE.png",
                         help="plot the run as the simulated commands' --plot does (a "
-                             "simulated run's recording)")
+                             "simulated run's recording; default: no plot)")
     replay.add_argument("--headless", action="store_true",
-                        help="no viewer even if a display exists")
+                        help="no viewer even if a display exists (default: the viewer when a "
+                             "display exists)")
     replay.add_argument("--speed", type=float_in(0.01, 100.0, what="a speed", unit="x",
                                                  fmt="g"), default=1.0, metavar="X",
                         help="played seconds per recorded second, in [0.01, 100] "
