@@ -291,9 +291,9 @@ class DaqpBackend(QpBackend):
 
     def compiled_solve(self, problem: QpProblem) -> tuple[Any, tuple, np.ndarray] | None:
         """DAQP's C function called from compiled code on the problem's direct call (see
-        :meth:`QpBackend.compiled_solve`); ``None`` with a hot start or without direct
-        calls."""
-        if self.hot_start:
+        :meth:`QpBackend.compiled_solve`); ``None`` with a hot start, without direct calls,
+        or in a subclass that overrides :meth:`solve` (its own solve must be the one called)."""
+        if self.hot_start or type(self).solve is not DaqpBackend.solve:
             return None
         self.prepare(problem)
         state = self._states[id(problem)]
