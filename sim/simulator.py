@@ -18,7 +18,7 @@ from wbc.core.validation import as_float, as_vector, check_name
 from wbc.model.description import FOOT_FRAMES, JOINT_NAMES, LEGS, Go2Description
 from wbc.model.joint_map import JointMap
 from wbc.model.orders import DESCRIPTION_ORDERS
-from wbc.robot_io.motor_command import MotorCommand
+from wbc.robot_io.motor_command import MotorCommand, command_fine
 
 _VECTOR = numba.float64[:]
 _CONTIGUOUS = numba.float64[::1]
@@ -60,20 +60,15 @@ def _drive(ctrl, kp_bias, kd_bias, q_des, dq_des, kp, kd, tau_ff, effort_limit):
     """The drivers' law as MuJoCo's actuators, ``ctrl + biasprm . (1, q, dq)``, written only
     when a driver takes the command; False (nothing written) when it would refuse it.
 
-    Taken: the shapes (n,), finite values, gains >= 0, ``|tau_ff| <= effort_limit``, as
-    :meth:`~wbc.robot_io.motor_command.MotorCommand.problems` judges (its check and this
-    write in one compiled call). ``ctrl = tau_ff + kp q_des + kd dq_des`` (NumPy's order of
+    Taken: the shapes (n,), finite values, gains >= 0, ``|tau_ff| <= effort_limit``, by
+    :func:`~wbc.robot_io.motor_command.command_fine`, the check
+    :meth:`~wbc.robot_io.motor_command.MotorCommand.problems` makes (it and this write in one
+    compiled call). ``ctrl = tau_ff + kp q_des + kd dq_des`` (NumPy's order of
     operations: the same bits), ``biasprm[:, 1] = -kp``, ``biasprm[:, 2] = -kd``.
     """
     n = effort_limit.shape[0]
-    if (q_des.shape[0] != n or dq_des.shape[0] != n or kp.shape[0] != n or kd.shape[0] != n
-            or tau_ff.shape[0] != n or ctrl.shape[0] != n):
+    if ctrl.shape[0] != n or not command_fine(q_des, dq_des, kp, kd, tau_ff, effort_limit):
         return False
-    for i in range(n):
-        if not (math.isfinite(q_des[i]) and math.isfinite(dq_des[i]) and math.isfinite(kp[i])
-                and math.isfinite(kd[i]) and math.isfinite(tau_ff[i])
-                and kp[i] >= 0.0 and kd[i] >= 0.0 and abs(tau_ff[i]) <= effort_limit[i]):
-            return False
     for i in range(n):
         ctrl[i] = tau_ff[i] + kp[i] * q_des[i] + kd[i] * dq_des[i]
         kp_bias[i] = -kp[i]

@@ -14,8 +14,9 @@ _VECTOR = numba.float64[:]
 
 
 @numba.njit(numba.boolean(_VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR), cache=True)
-def _command_fine(q_des, dq_des, kp, kd, tau_ff, effort_limit):
-    """True when a driver takes the command: shapes (n,), finite, gains >= 0, |tau_ff| <= limit."""
+def command_fine(q_des, dq_des, kp, kd, tau_ff, effort_limit):
+    """True when a driver takes the command: shapes (n,), finite, gains >= 0, |tau_ff| <= limit
+    (compiled: the simulated drivers call it inside their own compiled write)."""
     n = effort_limit.shape[0]
     if (q_des.shape[0] != n or dq_des.shape[0] != n or kp.shape[0] != n or kd.shape[0] != n
             or tau_ff.shape[0] != n):
@@ -139,7 +140,7 @@ class MotorCommand:
         by index. A good command of float64 vectors is checked without allocating.
         """
         try:
-            if _command_fine(self.q_des, self.dq_des, self.kp, self.kd, self.tau_ff,
+            if command_fine(self.q_des, self.dq_des, self.kp, self.kd, self.tau_ff,
                              effort_limit):
                 return ""
         except TypeError:  # not float64 vectors: the checks below say what is wrong
