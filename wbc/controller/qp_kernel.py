@@ -373,16 +373,5 @@ def accept(T, t0, z, x, x_prev, A_r, tau_first, tau_offset, tau, loaded, force_s
            tau_prev):
     """:func:`finish` for a tick solved in compiled code, which also keeps the torques for
     the torque-rate cost (``tau_prev``)."""
-    expand(T, t0, z, x)
-    x_prev[:] = x
-    nz = z.size
-    for k in range(tau.size):
-        s = tau_offset[k]
-        for j in range(nz):
-            s += A_r[tau_first + k, j] * z[j]
-        tau[k] = s
-        tau_prev[k] = s
-    forces[:, :] = 0.0
-    for idx in range(loaded.size):
-        for a in range(3):
-            forces[loaded[idx], a] = x[force_start + 3 * idx + a]
+    finish(T, t0, z, x, x_prev, A_r, tau_first, tau_offset, tau, loaded, force_start, forces)
+    tau_prev[:] = tau
