@@ -31,7 +31,7 @@ test-slow: $(STAMP)
 # then the tests that need them (CI's third stage, after the two above ran without rclpy).
 ROS2_STAMP := $(VENV)/.ros2-installed-stamp
 $(ROS2_STAMP): $(STAMP) pyproject.toml
-	$(BIN)/python -m pip install -q -e '.[test,scale,ros2]'
+	$(BIN)/python -m pip install -q -e '.[test,scale,solvers,ros2]'
 	touch $(ROS2_STAMP)
 
 install-ros2: $(ROS2_STAMP)

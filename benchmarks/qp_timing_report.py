@@ -19,6 +19,20 @@ def _fmt(value: Any, digits: int = 0) -> str:
     return str(value)
 
 
+def backend_line(row: dict[str, Any]) -> str:
+    """One backend's row of the tick-time table, or ``skipped: <reason>`` (one line)."""
+    if row["skipped"]:
+        return f"{row['name']:<22}skipped: {row['skipped']}"
+    st = row["stage_median_us"]
+    return (f"{row['name']:<22}{row['ticks']:>6}{_fmt(st['model']):>7}"
+            f"{_fmt(st['assembly']):>7}{_fmt(st['solve']):>8}{_fmt(row['median_us']):>8}"
+            f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}{_fmt(row['max_us']):>8}"
+            f"{_fmt(row['max_eq_violation'], -1):>9}{_fmt(row['max_ineq_violation'], -1):>10}"
+            f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}"
+            f"{_fmt(row['cpu_median_us']):>8}{_fmt(row['cpu_ratio_to_placo'], 2):>8}"
+            f"{_fmt(100 * row['cpu_share']):>5}")
+
+
 def format_report(report: dict[str, Any]) -> str:
     """The tables as plain text."""
     m = report["machine"]
@@ -31,19 +45,7 @@ def format_report(report: dict[str, Any]) -> str:
             f"{'median':>8}{'p90':>8}{'p99':>8}{'max':>8}{'eq viol':>9}{'ineq viol':>10}"
             f"{'fail':>5}{'x PlaCo':>8}{'cpu med':>8}{'x PlaCo':>8}{'cpu%':>5}")
     lines += ["Tick time [us] per backend (stage columns: medians)", head, "-" * len(head)]
-    for row in report["backends"]:
-        if row["skipped"]:
-            lines.append(f"{row['name']:<22}skipped: {row['skipped']}")
-            continue
-        st = row["stage_median_us"]
-        lines.append(
-            f"{row['name']:<22}{row['ticks']:>6}{_fmt(st['model']):>7}"
-            f"{_fmt(st['assembly']):>7}{_fmt(st['solve']):>8}{_fmt(row['median_us']):>8}"
-            f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}{_fmt(row['max_us']):>8}"
-            f"{_fmt(row['max_eq_violation'], -1):>9}{_fmt(row['max_ineq_violation'], -1):>10}"
-            f"{row['failures']:>5}{_fmt(row['ratio_to_placo'], 2):>8}"
-            f"{_fmt(row['cpu_median_us']):>8}{_fmt(row['cpu_ratio_to_placo'], 2):>8}"
-            f"{_fmt(100 * row['cpu_share']):>5}")
+    lines += [backend_line(row) for row in report["backends"]]
     h2h = report["head_to_head"]
     d, p = h2h["default"], h2h["placo"]
     low, mid, high = h2h["block_ratio_p10_p50_p90"]

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Create .venv (when missing) and install the package with its test and scale (Ray) extras.
+# Create .venv (when missing) and install the package with its test, scale (Ray) and solvers
+# (quadprog, GPL: the benchmark's comparison) extras.
 # Also installs, when they are missing and apt-get is usable (root or passwordless sudo), Debian's
 # Mesa OSMesa library (offscreen video rendering), Cyclone DDS 0.10.x in C (the DDS interop
 # test's peer) and Xvfb (the viewer window's test); skipped otherwise.
@@ -42,7 +43,7 @@ fi
 # editable_mode=compat: the checkout on sys.path through a plain .pth line, which mypy and
 # pyright read from outside the checkout (setuptools' default editable install is an import
 # hook they cannot see: "Cannot find implementation or library stub for module 'wbc'").
-.venv/bin/python -m pip install -q -e '.[test,scale]' --config-settings editable_mode=compat
+.venv/bin/python -m pip install -q -e '.[test,scale,solvers]' --config-settings editable_mode=compat
 # pyright (the npm registry's, pinned) for tests/test_typed_messages.py, which runs it on a
 # user's scripts from outside the checkout; skipped (the test says so) where npm is missing.
 if command -v npm >/dev/null 2>&1 && [ ! -x .venv/node_modules/.bin/pyright ]; then

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Collection
 from functools import partial
 
 import numpy as np
@@ -19,6 +20,9 @@ except ImportError as err:  # pragma: no cover - depends on the machine
 #: Solvers whose one-shot call this library registers (when qpsolvers sees them).
 SOLVERS = ("clarabel", "cvxopt", "daqp", "ecos", "highs", "osqp", "piqp", "proxqp", "qpalm",
            "quadprog", "scs")
+#: Solvers this package installs only through an optional extra: (extra, licence). quadprog is
+#: GPL-2.0-or-later, so it stays out of the BSD-3 package's required dependencies.
+EXTRAS = {"quadprog": ("solvers", "GPL-2.0-or-later")}
 #: Tight tolerances where qpsolvers passes them on, so solutions are comparable.
 _SETTINGS = {
     "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "polishing": True, "max_iter": 20000},
@@ -81,10 +85,24 @@ class QpsolversBackend(QpBackend):
                         status="optimal" if found else "failed", reason=reason)
 
 
-if qpsolvers is not None:
-    for _solver in SOLVERS:
-        if _solver in qpsolvers.available_solvers:
-            register_backend(f"qpsolvers:{_solver}", partial(QpsolversBackend, _solver))
+def missing_reason(solver: str) -> str:
+    """Why ``qpsolvers:<solver>`` is not available: the extra that installs it, if one does."""
+    if solver in EXTRAS:
+        extra, licence = EXTRAS[solver]
+        return (f"{solver} is not installed ({licence}, an optional extra): "
+                f"pip install 'go2-wbc[{extra}]'")
+    return f"qpsolvers does not see solver {solver!r} on this machine"
+
+
+def register_solvers(available: Collection[str]) -> None:
+    """Register ``qpsolvers:<name>`` for each of :data:`SOLVERS` in ``available`` (qpsolvers'
+    ``available_solvers``), and the reason for each other one."""
+    for solver in SOLVERS:
+        if solver in available:
+            register_backend(f"qpsolvers:{solver}", partial(QpsolversBackend, solver))
         else:
-            register_missing(f"qpsolvers:{_solver}",
-                             f"qpsolvers does not see solver {_solver!r} on this machine")
+            register_missing(f"qpsolvers:{solver}", missing_reason(solver))
+
+
+if qpsolvers is not None:
+    register_solvers(qpsolvers.available_solvers)
