@@ -1,11 +1,10 @@
 """A wall-clock run (``go2-wbc run --dds``) into a
-:class:`~actions.robot.run_recording.RunRecording`: :class:`RealtimeRecording`, a
+:class:`~actions.robot.recording_process.RecordingProcess`: :class:`RealtimeRecording`, a
 :class:`~actions.robot.realtime_loop.RealtimeLoop` callback.
 
-The tick only copies its snapshot; the messages are logged in the time left before the next
-deadline (after the command is written), when the next one is expected to fit with
-:data:`IDLE_MARGIN_S` to spare. A snapshot that does not fit waits in the queue; a full queue
-drops new ones (counted).
+The tick only copies its snapshot into the recording's pipe, every ``decimation``-th tick;
+the messages are built and written in the recording's child process, never in the loop's
+thread (a full pipe drops the snapshot, counted).
 """
 
 from __future__ import annotations
@@ -15,7 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from actions.robot.run_recording import RunRecording, Snapshot
+from actions.robot.recording_process import RecordingProcess
+from actions.robot.run_recording import Snapshot
 from actions.robot.tick_log import FootTargets
 from actions.robot.tick_stats import SERIES
 from wbc.model.description import LEGS
@@ -23,29 +23,25 @@ from wbc.model.description import LEGS
 if TYPE_CHECKING:
     from actions.robot.realtime_loop import RealtimeLoop
 
-#: Time [s] left untouched before the next deadline (the garbage collector's, the wake-up's).
-IDLE_MARGIN_S = 2e-4
 _TICK = SERIES.index("tick")
 
 
 class RealtimeRecording:
-    """Snapshots a wall-clock loop's ticks every ``recording.decimation`` ticks, logs them in
-    idle time.
+    """Snapshots a wall-clock loop's ticks every ``recording.decimation`` ticks into
+    ``recording`` (its child process logs them).
 
     Args:
         recording: Where the snapshots go.
     """
 
-    def __init__(self, recording: RunRecording):
+    def __init__(self, recording: RecordingProcess):
         self.recording = recording
         self._targets: FootTargets | None = None
         self._declared = False
 
     def __call__(self, rt: RealtimeLoop) -> None:
-        recording = self.recording
-        if recording.due():
+        if self.recording.due():
             self._capture(rt)
-        recording.drain(rt.deadlines.time_left_s() - IDLE_MARGIN_S)
 
     def _capture(self, rt: RealtimeLoop) -> None:
         loop = rt.loop

@@ -160,6 +160,11 @@ class RunRecording:
         self._step = 0
         self._next_description_s = -math.inf
 
+    @property
+    def port(self) -> int | None:
+        """The channels' WebSocket port (``None``: no server)."""
+        return self.channels.port
+
     def due(self) -> bool:
         """Count a tick; whether this one is to be snapshotted (every ``decimation``-th)."""
         due = self._ticks % self.decimation == 0

@@ -5,10 +5,13 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from actions.robot.run_recording import DEFAULT_RATE_HZ, RunRecording
 from sim.cli.arg_types import output_file, whole_in
+
+if TYPE_CHECKING:
+    from actions.robot.recording_process import RecordingProcess
 
 #: The port ``--foxglove`` serves on when given without one (Foxglove's default).
 DEFAULT_PORT = 8765
@@ -47,7 +50,8 @@ def add_recording_options(group: Any, *, listed: bool = True) -> None:
 
 def open_recording(args: argparse.Namespace, *, control_period_s: float,
                    metadata: dict[str, str]) -> RunRecording | None:
-    """The recording ``--mcap`` and ``--foxglove`` ask for (``None``: neither).
+    """The recording ``--mcap`` and ``--foxglove`` ask for (``None``: neither), logged in the
+    simulated run's own hook.
 
     Raises:
         ConfigurationError: The port cannot be served.
@@ -61,12 +65,34 @@ def open_recording(args: argparse.Namespace, *, control_period_s: float,
     return RunRecording(channels, control_period_s=control_period_s)
 
 
-def recording_summary(args: argparse.Namespace, recording: RunRecording) -> str:
+def open_recording_process(args: argparse.Namespace, *, control_period_s: float,
+                           metadata: dict[str, str]) -> RecordingProcess | None:
+    """The recording ``--mcap`` and ``--foxglove`` ask for (``None``: neither), built and
+    written in a child process, off a wall-clock loop's thread (``run --dds``).
+
+    Raises:
+        ConfigurationError: The port cannot be served, or the child did not start.
+    """
+    mcap, port = getattr(args, "mcap", None), getattr(args, "foxglove", None)
+    if mcap is None and port is None:
+        return None
+    from actions.robot.recording_process import RecordingProcess
+
+    return RecordingProcess(mcap_path=mcap, port=port, metadata=metadata,
+                            control_period_s=control_period_s)
+
+
+def recording_summary(args: argparse.Namespace,
+                      recording: RunRecording | RecordingProcess) -> str:
     """What the recording wrote or served, with its dropped snapshots."""
     where = []
     if getattr(args, "mcap", None) is not None:
         where.append(f"wrote {args.mcap}")
-    if recording.channels.port is not None:
-        where.append(f"served ws://127.0.0.1:{recording.channels.port}")
+    if recording.port is not None:
+        where.append(f"served ws://127.0.0.1:{recording.port}")
+    from actions.robot.recording_process import RecordingProcess
+
+    error = recording.error if isinstance(recording, RecordingProcess) else ""
     return (f"{' and '.join(where)} ({recording.logged} snapshots at "
-            f"{recording.rate_hz:g} Hz, {recording.dropped} dropped)")
+            f"{recording.rate_hz:g} Hz, {recording.dropped} dropped)"
+            + (f"; recording incomplete: {error}" if error else ""))

@@ -26,7 +26,11 @@ from sim.cli.exit_codes import (
     EXIT_UNAVAILABLE,
     EXIT_USAGE,
 )
-from sim.cli.recording_options import add_recording_options, open_recording, recording_summary
+from sim.cli.recording_options import (
+    add_recording_options,
+    open_recording_process,
+    recording_summary,
+)
 from sim.cli.ros2_command import start_ros2_node
 from sim.cli.settings import add_settings
 from wbc.core.errors import ConfigurationError
@@ -200,15 +204,15 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
         if log is not None:
             rt.callbacks.append(log.record)
         rt.callbacks.append(_StatusPrinter(say, dry_run=args.dry_run))
-        recording = open_recording(args, control_period_s=period_s, metadata={
+        recording = open_recording_process(args, control_period_s=period_s, metadata={
             "command": "run --dds", "control_rate_hz": str(args.control_rate),
             "estimator": args.estimator, "dry_run": str(args.dry_run)})
         if recording is not None:
             from actions.robot.realtime_recording import RealtimeRecording
 
             rt.callbacks.append(RealtimeRecording(recording))
-            if recording.channels.port is not None:
-                say(f"foxglove: serving ws://127.0.0.1:{recording.channels.port}")
+            if recording.port is not None:
+                say(f"foxglove: serving ws://127.0.0.1:{recording.port}")
         calibration = None
         if args.calibrate is not None:
             calibration = CalibrateWhenStanding(args.calibrate, say)
