@@ -1,4 +1,5 @@
-"""``--plot``: a run's per-tick arrays in one figure: each quantity on its own axis, in its unit."""
+"""``--plot``: a run's per-tick arrays in one figure: each quantity on its own axis, in its unit
+(a run that walked: :func:`sim.walking_plot.walking_figure`)."""
 
 from __future__ import annotations
 
@@ -74,7 +75,9 @@ def plot_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = "")
     """The raised foot's height against its target [m], the CoM margin [mm] with the steps
     where the support polygon switches, the raised foot's normal force [N], the estimate's
     base height error [mm] and velocity error [mm/s] against the truth, and each control
-    tick's time [us], against simulated time, the goal's phases shaded.
+    tick's time [us], against simulated time, the goal's phases shaded. A run that walked
+    (:func:`sim.walking_plot.walked`) gets :func:`sim.walking_plot.walking_figure`: commanded
+    against measured velocity.
 
     Args:
         arrays: :meth:`sim.run_recorder.TickRecorder.arrays` (or a recording's).
@@ -82,6 +85,10 @@ def plot_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = "")
         caption: The second (:func:`sim.cli.output.run_caption`: plant, rate, state
             source, estimator).
     """
+    from sim.walking_plot import walked, walking_figure
+
+    if walked(arrays):
+        return walking_figure(arrays, title=title, caption=caption)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -121,7 +128,16 @@ def plot_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = "")
                     transform=ax.transAxes, ha="center", va="center", fontsize=8)
     axes[3].set_title("the state estimate against the simulator's truth (|v| for the "
                       "velocity)", fontsize=8, loc="left")
-    ax = axes[5]
+    control_tick_axis(axes[5], arrays)
+    axes[5].set_xlabel("simulated time [s]")
+    shade_phases(plt, fig, axes, t, arrays["phase"], Patch)
+    fig.suptitle(f"{title}\n{caption}" if caption else title, fontsize=10)
+    return fig
+
+
+def control_tick_axis(ax: Axes, arrays: dict[str, np.ndarray]) -> None:
+    """Each control tick's time [us] (log scale) and the control period."""
+    t = arrays["t_s"]
     ax.plot(t, arrays["tick_us"], lw=0.5)
     if "control_period_s" in arrays:  # a recording's rows are snapshots, not ticks
         period_us = float(arrays["control_period_s"]) * 1e6
@@ -132,13 +148,9 @@ def plot_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = "")
     ax.set_yscale("log")  # the first tick builds the solver workspace: 100x the others
     ax.set_ylabel("control tick [us]")
     ax.legend(loc="upper right", fontsize=8)
-    ax.set_xlabel("simulated time [s]")
-    _shade_phases(plt, fig, axes, t, arrays["phase"], Patch)
-    fig.suptitle(f"{title}\n{caption}" if caption else title, fontsize=10)
-    return fig
 
 
-def _shade_phases(plt: Any, fig: Any, axes: Any, t: np.ndarray, phases: np.ndarray,
+def shade_phases(plt: Any, fig: Any, axes: Any, t: np.ndarray, phases: np.ndarray,
                   patch: Any) -> None:
     """A band per phase on every axis and a legend of them. The goal ends on the tick it
     reports ``complete``, so that phase gets a band past the last tick (the axis widened by

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from actions.go2.high_five_behaviour import PHASE_NAMES
+from sim.gait_view import walking_motion
 from sim.run_plot import write_plot  # the plot's home; kept importable from here
 from wbc.model.description import JOINT_NAMES, LEGS
 from wbc.model.support_polygon import shrunk_signed_distance
@@ -21,6 +22,8 @@ if TYPE_CHECKING:
     from sim.control_loop import ControlLoop
     from wbc.controller.control_output import ControlOutput
 
+#: A tick's commanded velocity while nothing walks.
+_NO_COMMAND = np.full(3, np.nan)
 #: The foot a HighFive goal raises.
 RAISED_LEG = "FR"
 #: Feedback phases in which the raised foot follows a target (raising, holding, lowering).
@@ -36,7 +39,9 @@ class TickRecorder:
     ``q``, ``v`` are the controller's state (the estimate, unless ``--state truth``);
     ``q_true``, ``v_true`` the simulator's exact state at the same instant;
     ``estimate_contact`` the estimator's contact weight of each foot and ``estimate_flags``
-    its fault flags (``wbc.estimation.state_estimator``'s constants; 0 with ``--state truth``); when
+    its fault flags (``wbc.estimation.state_estimator``'s constants; 0 with ``--state truth``);
+    ``commanded_velocity`` the walking motion's commanded forward, lateral [m/s] and yaw rate
+    [rad/s] (:func:`sim.gait_view.walking_motion`; NaN while nothing walks); when
     estimating, every sensor record the estimator read and its contact schedule
     (:class:`wbc.robot_io.sensor_log.SensorLog` reads them back).
     """
@@ -49,7 +54,7 @@ class TickRecorder:
         self.rows: dict[str, list[Any]] = {k: [] for k in (
             "t_s", "q", "v", "q_true", "v_true", "estimate_contact", "estimate_flags", "tau",
             "foot_target", "foot_position", "phase", "contact_forces", "com_margin_m",
-            "qp_ok", "tick_us")}
+            "qp_ok", "tick_us", "commanded_velocity")}
         #: The truth at the instant the next tick's state describes (before its physics).
         self._truth = None if loop is None else loop.true_state()
 
@@ -91,6 +96,9 @@ class TickRecorder:
         row["com_margin_m"].append(margin)
         row["qp_ok"].append(out.ok)
         row["tick_us"].append(out.timings.get("total", math.nan) * 1e6)
+        walking = walking_motion(loop)
+        row["commanded_velocity"].append(_NO_COMMAND if walking is None
+                                         else np.array(walking.commanded_velocity))
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The recorded rows as arrays (N = ticks), plus the names that label them."""

@@ -17,6 +17,9 @@ if TYPE_CHECKING:
 FLOOR_Z = 0.003
 IDENTITY = np.eye(3).reshape(9)
 ZERO3 = np.zeros(3)
+#: The share of an arrow geom's ``size[2]`` MuJoCo 4.0's renderer draws: the shaft and head
+#: span half of it (``tests/test_scene_overlay.py`` checks the drawn length in pixels).
+ARROW_DRAWN_FRACTION = 0.5
 
 
 def on_floor(points: np.ndarray, z: float = FLOOR_Z) -> np.ndarray:
@@ -66,6 +69,17 @@ def connect(scene: mujoco.MjvScene, kind: int, rgba: Sequence[float], width: flo
         init_geom(geom, kind, rgba, ZERO3, ZERO3)
         mujoco.mjv_connector(geom, kind, width, np.asarray(start, dtype=float),
                              np.asarray(end, dtype=float))
+
+
+def arrow(scene: mujoco.MjvScene, rgba: Sequence[float], width: float, start: np.ndarray,
+          end: np.ndarray) -> None:
+    """Append an arrow drawn from ``start`` to ``end`` [m] (its geom made
+    1 / :data:`ARROW_DRAWN_FRACTION` as long, since the renderer draws that share of it)."""
+    import mujoco
+
+    start = np.asarray(start, dtype=float)
+    connect(scene, mujoco.mjtGeom.mjGEOM_ARROW, rgba, width, start,
+            start + (np.asarray(end, dtype=float) - start) / ARROW_DRAWN_FRACTION)
 
 
 def triangle(scene: mujoco.MjvScene, rgba: Sequence[float], a: np.ndarray, b: np.ndarray,

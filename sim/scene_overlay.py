@@ -1,4 +1,5 @@
-"""What the controller is doing, drawn into a MuJoCo scene: CoM, support polygon, forces, target."""
+"""What the controller is doing, drawn into a MuJoCo scene: CoM, support polygon, forces, target,
+gait."""
 
 from __future__ import annotations
 
@@ -9,7 +10,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sim.gait_overlay import GaitOverlay
+from sim.gait_view import VELOCITY_UNITS, GaitSource, GaitView
 from sim.scene_geoms import (
+    ARROW_DRAWN_FRACTION,
     FLOOR_Z,
     ZERO3,
     add_geom,
@@ -33,9 +37,9 @@ if TYPE_CHECKING:
 # before it chooses MuJoCo's rendering backend (MUJOCO_GL), which must precede the import.
 
 #: Every overlay, in drawing order.
-OVERLAY_NAMES: tuple[str, ...] = ("com", "polygon", "forces", "measured", "target")
+OVERLAY_NAMES: tuple[str, ...] = ("com", "polygon", "forces", "measured", "target", "gait")
 #: What the viewer and the video show unless told otherwise.
-DEFAULT_OVERLAYS: tuple[str, ...] = ("com", "polygon", "forces", "target")
+DEFAULT_OVERLAYS: tuple[str, ...] = ("com", "polygon", "forces", "target", "gait")
 #: Overlay colours (RGBA): saturated hues the scene's greys and blues do not use.
 COM_RGBA = (0.95, 0.10, 0.08, 1.0)
 POLYGON_RGBA = (0.10, 0.85, 0.25, 1.0)
@@ -63,9 +67,6 @@ FORCE_SCALE_M_PER_N = 0.004
 _TRACE_STEP_M = 0.005
 #: Most points a trace keeps (the oldest are dropped).
 _TRACE_POINTS = 400
-#: The share of an arrow geom's ``size[2]`` MuJoCo 4.0's renderer draws: the shaft and head
-#: span half of it (``tests/test_scene_overlay.py`` checks the drawn length in pixels).
-ARROW_DRAWN_FRACTION = 0.5
 
 def parse_overlays(text: str) -> tuple[str, ...]:
     """Overlay names from a comma-separated list, ``all`` or ``none`` (the CLI's syntax).
@@ -105,12 +106,17 @@ class SceneOverlay:
       the controller commands, :data:`FORCE_SCALE_M_PER_N` long per newton;
     - ``measured``: a thinner blue arrow beside it, the force MuJoCo measures;
     - ``target``: a translucent magenta ball at each raised foot's target, and the target's
-      trace since the foot left the ground.
+      trace since the foot left the ground;
+    - ``gait``: while a motion walks (``gait_of`` finds it), the feet in stance and in swing,
+      the planned footholds, the commanded and the measured velocity
+      (:class:`sim.gait_overlay.GaitOverlay`); the legend lists them once one was drawn.
 
     Everything comes from the loop's public state: the centre of mass, the support legs and
     the feet from ``loop.controller``, the margin from its ``config.contacts.support_margin_m``, the
     commanded forces from ``loop.last_output.forces``, the measured ones from ``loop.sim``,
-    a swing foot's target from the controller's foot task. The geoms are decor: they take no
+    a swing foot's target from the controller's foot task, the gait from the walking motion
+    ``gait_of`` returns (its :class:`sim.gait_view.GaitView` at the controller's state,
+    ``loop.context.q``, and feet). The geoms are decor: they take no
     part in the physics and cast no shadow.
 
     Use it with the viewer (``handle.user_scn``) or an offscreen renderer (``renderer.scene``
@@ -127,12 +133,15 @@ class SceneOverlay:
 
     def __init__(self, overlays: Iterable[str] = DEFAULT_OVERLAYS, *,
                  force_scale_m_per_n: float = FORCE_SCALE_M_PER_N,
-                 status_of: Callable[[], tuple[str, float]] | None = None):
+                 status_of: Callable[[], tuple[str, float]] | None = None,
+                 gait_of: Callable[[ControlLoop], GaitSource | None] | None = None):
         """Args:
             overlays: Names from :data:`OVERLAY_NAMES`; an empty list draws nothing.
             force_scale_m_per_n: Arrow length per newton of contact force [m/N].
             status_of: Returns the running goal's ``(phase, progress 0..1)`` for the text
                 panel (:meth:`status_lines`); the panel leaves them out without it.
+            gait_of: Returns the loop's walking motion now, or ``None`` when nothing walks
+                (default :func:`sim.gait_view.walking_motion`).
 
         Raises:
             ConfigurationError: An unknown overlay name (the message lists the valid ones),
@@ -148,6 +157,14 @@ class SceneOverlay:
         self.force_scale_m_per_n = as_float("force_scale_m_per_n", force_scale_m_per_n,
                                             low=1e-6)
         self.status_of = status_of
+        if gait_of is None:
+            from sim.gait_view import walking_motion
+
+            gait_of = walking_motion
+        self.gait_of = gait_of
+        self.gait = GaitOverlay()
+        #: Whether a gait was drawn yet (from then on the legend lists its colours).
+        self.gait_shown = False
         #: Past targets of each swinging foot since it left the ground [m].
         self.traces: dict[str, list[np.ndarray]] = {leg: [] for leg in LEGS}
         self._swinging: set[str] = set()
@@ -185,7 +202,19 @@ class SceneOverlay:
             self._record_traces(controller, swing)
             for leg in swing:
                 self._draw_target(scene, leg, controller.foot_target(leg))
+        if "gait" in self.overlays:
+            view = self.gait_view(loop)
+            if view is not None:
+                self.gait.draw(scene, view)
+                self.gait_shown = True
         return scene.ngeom - start
+
+    def gait_view(self, loop: ControlLoop) -> GaitView | None:
+        """The walking motion's view at the controller's state (``None``: nothing walks)."""
+        source = self.gait_of(loop)
+        if source is None:
+            return None
+        return GaitView.of(source, q=loop.context.q, feet=loop.controller.foot_positions())
 
     def _draw_com(self, scene: mujoco.MjvScene, com: np.ndarray) -> None:
         import mujoco
@@ -270,10 +299,12 @@ class SceneOverlay:
         for name in OVERLAY_NAMES:
             if name not in self.overlays:
                 continue
-            for colour, rgba, text in LEGEND[name]:
+            for colour, rgba, text in LEGEND.get(name, ()):
                 if name in ("forces", "measured"):  # no commas: the viewer's font lacks them
                     text += f" ({self.force_scale_m_per_n * 1e3:g} mm/N)"
                 entries.append((colour, tuple(rgba), text))
+            if name == "gait" and self.gait_shown:
+                entries += [(c, tuple(rgba), text) for c, rgba, text in self.gait.legend()]
         return entries
 
     def legend_lines(self) -> tuple[str, str]:
@@ -333,6 +364,12 @@ class SceneOverlay:
         rows.append(("time", f"{loop.context.now_s:.2f} s"))
         controller = loop.controller
         rows.append(("support", " ".join(controller.support_legs()) or "-"))
+        view = self.gait_view(loop) if "gait" in self.overlays else None
+        if view is not None:
+            rows.append(("swing", " ".join(view.swing_legs) or "-"))
+            for label, values in (("commanded", view.commanded), ("measured", view.measured)):
+                rows.append((label, "  ".join(f"{value:+.2f} {unit}" for value, unit
+                                              in zip(values, VELOCITY_UNITS, strict=True))))
         margin = loop.context.com_margin_m()
         if math.isfinite(margin):
             rows.append(("CoM margin", f"{margin * 1e3:.0f} mm"))

@@ -30,7 +30,8 @@ class VideoRecorder:
     With an ``overlay`` (:class:`sim.scene_overlay.SceneOverlay`), each frame also shows
     its geoms, at the top left its caption (the goal's phase and progress, the time) and at
     the bottom left its legend (what each colour is, for the overlays that are on; not in
-    frames less than :data:`LEGEND_MIN_HEIGHT_PX` tall, or with ``legend=False``).
+    frames less than :data:`LEGEND_MIN_HEIGHT_PX` tall, or with ``legend=False``). The
+    legend is drawn again when the overlay's changes (a walk starts: the gait's colours).
     """
 
     def __init__(self, sim: Go2Simulator, path: Path, *, fps: int, size: tuple[int, int],
@@ -59,10 +60,12 @@ class VideoRecorder:
         follow_base(self.camera, sim.model)
         self.sim = sim
         self.overlay = overlay
-        entries = overlay.legend() if overlay is not None and legend else []
+        #: Whether frames get a legend (asked for, and tall enough to read it).
+        self.legend_on = legend and height >= LEGEND_MIN_HEIGHT_PX
+        self._legend_entries: list[tuple[str, tuple[float, ...], str]] = []
         #: Stamps the legend into a frame (None: no legend).
-        self.legend = (LegendStamp(entries, frame_height=height)
-                       if entries and height >= LEGEND_MIN_HEIGHT_PX else None)
+        self.legend: LegendStamp | None = None
+        self._update_legend()
         self.period_s = 1.0 / fps
         self.next_s = sim.time_s
         self.frames = 0
@@ -82,10 +85,21 @@ class VideoRecorder:
         if self.overlay is not None:
             self.overlay.draw(self.renderer.scene, loop)
             self.overlay.draw_caption(self.renderer.scene, loop, aspect=self.aspect)
+            self._update_legend()
         frame = self.renderer.render()
         if self.legend is not None and self.overlay is not None:
             self.legend.stamp(frame)
         return frame
+
+    def _update_legend(self) -> None:
+        """A new stamp when the overlay's legend differs from the one stamped (2 ms)."""
+        if not self.legend_on or self.overlay is None:
+            return
+        entries = self.overlay.legend()
+        if entries != self._legend_entries:
+            self._legend_entries = entries
+            self.legend = (LegendStamp(entries, frame_height=self.renderer.height)
+                           if entries else None)
 
     def close(self) -> None:
         """Finish the file and free the GL context."""

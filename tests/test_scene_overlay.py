@@ -13,6 +13,13 @@ import pytest
 
 from actions import HighFiveGoal
 from sim.control_loop import ControlLoop
+from sim.gait_overlay import (
+    COMMANDED_RGBA,
+    FOOTHOLD_RGBA,
+    MEASURED_VELOCITY_RGBA,
+    STANCE_RGBA,
+    SWING_RGBA,
+)
 from sim.scene_overlay import (
     COM_RGBA,
     DEFAULT_OVERLAYS,
@@ -30,6 +37,7 @@ from sim.scene_overlay import (
 )
 from sim.video_recorder import LEGEND_MIN_HEIGHT_PX, LegendStamp, VideoRecorder
 from sim.viewer import ViewerHook
+from tests.test_gait_overlay import Trotting
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import FOOT_RADIUS_M, LEGS
 from wbc.model.support_polygon import SupportPolygon
@@ -43,7 +51,7 @@ WIDTH, HEIGHT = 480, 360
 
 
 @pytest.mark.parametrize(("text", "names"), [
-    ("com,polygon,forces,target", DEFAULT_OVERLAYS),
+    ("com,polygon,forces,target,gait", DEFAULT_OVERLAYS),
     ("target, COM", ("com", "target")),
     ("forces,forces", ("forces",)),
     ("all", OVERLAY_NAMES),
@@ -58,12 +66,13 @@ def test_a_bad_overlay_list_names_the_valid_ones(text):
     with pytest.raises(ConfigurationError) as err:
         parse_overlays(text)
     assert str(err.value) == ("expected a comma-separated list of com, polygon, forces, "
-                              f"measured, target, or all or none; received {text!r}")
+                              f"measured, target, gait, or all or none; received {text!r}")
 
 
 def test_an_unknown_overlay_name_is_refused_by_the_constructor():
     with pytest.raises(ConfigurationError, match=r"unknown overlay 'cop'; valid overlays: "
-                                                 r"com, polygon, forces, measured, target"):
+                                                 r"com, polygon, forces, measured, target, "
+                                                 r"gait$"):
         SceneOverlay(("com", "cop"))
 
 
@@ -333,12 +342,17 @@ def test_each_overlay_draws_only_when_switched_on(raising):
     loop, *_ = raising
     colours = {"com": {COM_RGBA}, "polygon": {POLYGON_RGBA, POLYGON_FILL_RGBA, MARGIN_RGBA},
                "forces": {FORCE_RGBA}, "measured": {MEASURED_RGBA},
-               "target": {TARGET_RGBA, TRACE_RGBA}}
+               "target": {TARGET_RGBA, TRACE_RGBA},
+               "gait": {STANCE_RGBA, SWING_RGBA, FOOTHOLD_RGBA, COMMANDED_RGBA,
+                        MEASURED_VELOCITY_RGBA}}
     scene = mujoco.MjvScene(loop.sim.model, maxgeom=2000)
     assert SceneOverlay(()).draw(scene, loop) == 0
+    # The high five does not walk: the gait overlay is given a motion that does.
+    assert SceneOverlay(("gait",)).draw(scene, loop) == 0
+    trotting = Trotting()
     for name in OVERLAY_NAMES:
         scene.ngeom = 0
-        count = SceneOverlay((name,)).draw(scene, loop)
+        count = SceneOverlay((name,), gait_of=lambda _: trotting).draw(scene, loop)
         assert count == scene.ngeom > 0, name
         drawn = {_rounded(scene.geoms[i].rgba) for i in range(count)}
         expected = {_rounded(c) for c in colours[name]}
