@@ -22,7 +22,7 @@ FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tasks and constraints", ("tasks",)),
     ("state estimation", ("wbc.estimation",)),
     ("the controller", ("wbc.controller",)),
-    ("motions", ("wbc.motions",)),
+    ("motions", ("wbc.motions", "wbc.locomotion")),
     ("the action framework", ("actions",)),
     ("ROS 2's standard interfaces", ("actions.ros_interfaces",)),
     ("the GO2's behaviours", ("actions.go2",)),
@@ -34,7 +34,7 @@ FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 PACKAGES = ("wbc", "tasks", "actions", "sim", "benchmarks", "go2_ros2")
 #: Package ``__init__`` modules that re-export names for users.
-FACADES = ("wbc", "tasks", "actions", "actions.robot", "wbc.backends")
+FACADES = ("wbc", "tasks", "actions", "actions.robot", "wbc.backends", "wbc.locomotion")
 #: Packages inside which an import cycle is tolerated for now: the QP backend registry
 #: (``wbc.backends.backend``) imports the backends it registers, which import it back.
 TOLERATED_CYCLES = ("wbc.backends",)

@@ -1,0 +1,51 @@
+"""A swing foot's path: up, across and down, smooth, at rest at lift-off and touch-down."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wbc.core.min_jerk import min_jerk
+
+
+def swing_reference(out: np.ndarray, start: np.ndarray, end: np.ndarray, *, height_m: float,
+                    progress: float, duration_s: float) -> np.ndarray:
+    """Position [m], velocity [m/s] and acceleration [m/s^2] of a swing foot, into ``out``'s
+    rows (3, 3); returns ``out``.
+
+    The horizontal motion is one minimum-jerk move from ``start`` to ``end`` over the whole
+    swing; the vertical one rises by ``height_m`` above the higher end point in the first
+    half and falls to ``end`` in the second, each half a minimum-jerk move. Position,
+    velocity and acceleration are continuous, and zero velocity and acceleration at both
+    ends: the foot leaves and lands without a jolt. ``end`` may change during the swing (a
+    foothold re-planned): the path bends towards it smoothly.
+
+    Args:
+        out: (3, 3) array: rows position, velocity, acceleration; columns x, y, z.
+        start: Lift-off position (3,) [m].
+        end: Touch-down position (3,) [m].
+        height_m: Apex above the higher of the two end points [m].
+        progress: Fraction of the swing done, clamped to ``[0, 1]``.
+        duration_s: The swing's duration [s] (> 0).
+    """
+    tau = min(max(progress, 0.0), 1.0)
+    s, ds, dds = min_jerk(tau)
+    rate, curvature = 1.0 / duration_s, 1.0 / (duration_s * duration_s)
+    for k in range(2):
+        delta = end[k] - start[k]
+        out[0, k] = start[k] + s * delta
+        out[1, k] = ds * rate * delta
+        out[2, k] = dds * curvature * delta
+    apex = max(start[2], end[2]) + height_m
+    # Each half lasts duration_s / 2: its time derivatives scale by 2 and 4.
+    if tau < 0.5:
+        s, ds, dds = min_jerk(2.0 * tau)
+        low = start[2]
+    else:
+        s, ds, dds = min_jerk(2.0 - 2.0 * tau)  # from the end backwards: the descent
+        ds = -ds
+        low = end[2]
+    delta = apex - low
+    out[0, 2] = low + s * delta
+    out[1, 2] = 2.0 * ds * rate * delta
+    out[2, 2] = 4.0 * dds * curvature * delta
+    return out

@@ -1,0 +1,335 @@
+"""Walking on velocity commands: a periodic gait on the whole-body controller's contact
+schedule, swing feet on smooth paths to footholds from the commanded and measured velocity."""
+
+from __future__ import annotations
+
+import enum
+import math
+
+import numpy as np
+
+from wbc.controller.balance_controller import BalanceController
+from wbc.controller.foot_reach import LEG_REACH_M
+from wbc.controller.whole_body_controller import WholeBodyController
+from wbc.core.errors import ConfigurationError
+from wbc.locomotion.foothold_planner import FootholdPlanner, yaw_rotation
+from wbc.locomotion.gait import GaitClock, GaitParameters, VelocityLimits
+from wbc.locomotion.swing_trajectory import swing_reference
+from wbc.model.description import LEGS
+
+
+class WalkPhase(enum.StrEnum):
+    """Phases of a walk, in order."""
+
+    STARTING = "starting"  # on four feet, the first pair unloading
+    WALKING = "walking"    # stepping
+    STOPPING = "stopping"  # zero velocity, the last steps, then four loaded feet
+    DONE = "done"          # standing on four loaded feet
+
+
+class _Leg(enum.Enum):
+    """What a leg does in the gait."""
+
+    STANCE = 0     # on the ground (reloading while its bound ramps up)
+    UNLOADING = 1  # on the ground, its bound ramping down to the lift-off
+    SWING = 2      # on its path to the foothold
+    LATE = 3       # past its touch-down time, still lowering
+
+
+#: Foot height [m] above its ground at which a descending foot counts as landed.
+TOUCH_M = 0.006
+#: How fast a late foot keeps going down [m/s], and for how long at most [s].
+LATE_SPEED_MPS, LATE_MAX_S = 0.3, 0.15
+#: Accelerations [m/s^2, rad/s^2] at which the commanded velocity follows a new command.
+LINEAR_ACCEL, YAW_ACCEL = 2.0, 4.0
+#: Farthest the CoM reference runs ahead of the CoM [m]: it is dragged, never wound up.
+COM_LEAD_M = 0.06
+#: Weight of the CoM task while walking: ten times the standing default, so that the QP
+#: does not lift the body to help a swinging foot up (it did by 2-3 cm a step at 20).
+COM_WEIGHT = 200.0
+#: Stop stepping once slower than this [m/s] (or after STOP_STEPPING_S), then settle.
+STOP_SPEED_MPS, STOP_STEPPING_S = 0.12, 0.6
+
+
+class Walking:
+    """Drives a :class:`WholeBodyController` through a gait on velocity commands.
+
+    A motion like :class:`wbc.LegLift`: :meth:`start` once, :meth:`set_velocity` any time,
+    :meth:`advance` every control tick before ``controller.step``; :meth:`request_stop` ends
+    on four loaded feet. The feet are unloaded before a lift-off and reloaded after a
+    touch-down by the contact schedule's force ramps (``transfer_s`` each). Positions are
+    world-frame [m]; velocities in the heading frame (x forward, y left).
+    """
+
+    def __init__(self, controller: BalanceController, *, gait: GaitParameters | None = None,
+                 limits: VelocityLimits | None = None):
+        """Args:
+            controller: The whole-body controller (its schedule, CoM, base and foot tasks).
+            gait: The gait (a trot by default).
+            limits: What :meth:`set_velocity` accepts.
+
+        Raises:
+            ConfigurationError: A controller that is not a :class:`WholeBodyController`.
+        """
+        if not isinstance(controller, WholeBodyController):
+            raise ConfigurationError(
+                f"controller: walking needs a WholeBodyController (its base and foot tasks), "
+                f"received {type(controller).__name__}")
+        self.controller = controller
+        self.gait = gait or GaitParameters()
+        self.limits = limits or VelocityLimits()
+        self.clock = GaitClock(self.gait)
+        self.phase: WalkPhase | None = None
+        #: Commanded velocity: forward, lateral [m/s], yaw rate [rad/s] (heading frame),
+        #: as it follows the last command at bounded accelerations.
+        self.commanded_velocity = np.zeros(3)
+        self.target_velocity = np.zeros(3)
+        self.measured_velocity = np.zeros(3)
+        self.distance_m = 0.0
+        self.footholds: dict[str, np.ndarray] = {}
+        self.gait_time_s = 0.0
+        self._legs = dict.fromkeys(LEGS, _Leg.STANCE)
+        self._path = np.zeros((3, 3))
+        self._starts: dict[str, np.ndarray] = {}       # each swing's lift-off point [m]
+        self._late_target: dict[str, np.ndarray] = {}  # a late foot's target [m]
+        self._late_s: dict[str, float] = {}            # how long it has been late [s]
+
+    # ------------------------------------------------------------------ commands
+
+    def set_velocity(self, forward_mps: float, lateral_mps: float,
+                     yaw_rate_radps: float) -> None:
+        """The velocity to walk at (heading frame); ignored once stopping.
+
+        Raises:
+            ConfigurationError: A value beyond :attr:`limits` (the field named).
+        """
+        checked = self.limits.check(forward_mps, lateral_mps, yaw_rate_radps)
+        if self.phase in (WalkPhase.STOPPING, WalkPhase.DONE):
+            return
+        self.target_velocity[:] = checked
+
+    def start(self, now_s: float) -> None:
+        """Begin from four feet in stance at time ``now_s`` [s].
+
+        Raises:
+            ConfigurationError: Not every foot in stance.
+        """
+        ctrl = self.controller
+        if len(ctrl.schedule.stance_legs) < len(LEGS):
+            raise ConfigurationError(f"walking needs all four feet in stance, stance now: "
+                                     f"{ctrl.schedule.stance_legs}")
+        com = ctrl.com_position()
+        yaw = self._yaw()
+        feet = ctrl.foot_positions()
+        heading = yaw_rotation(-yaw)
+        offsets = {leg: heading @ (feet[i, :2] - com[:2]) for i, leg in enumerate(LEGS)}
+        # Centre the stance on the CoM, so that each diagonal's midpoint lies under it.
+        mean = np.mean(list(offsets.values()), axis=0)
+        offsets = {leg: o - mean for leg, o in offsets.items()}
+        ground = float(np.mean(feet[:, 2]))
+        height = com[2] - ground
+        shoulder_height = float(np.mean([ctrl.shoulder_position(leg)[2] for leg in LEGS]))
+        reach = math.sqrt(max(LEG_REACH_M ** 2 - (shoulder_height - ground) ** 2, 0.01))
+        self.planner = FootholdPlanner(offsets, com_height_m=height,
+                                       max_step_m=min(0.2, 0.8 * reach))
+        self._com_ref = com.copy()
+        self._yaw_ref = yaw
+        self._ground = {leg: float(feet[i, 2]) for i, leg in enumerate(LEGS)}
+        self._lifted = dict.fromkeys(LEGS, -10)
+        self._min_stance = ctrl.schedule.min_stance
+        ctrl.schedule.min_stance = 2
+        self._com_weight = ctrl.com_task.weight
+        ctrl.com_task.set_weight(max(COM_WEIGHT, self._com_weight))
+        gait = self.gait
+        # The first lift-off one transfer (and a tick) from now: the leg of offset 0.5 (FR
+        # in a trot), or the first of the walk's sequence.
+        first = max(gait.offsets)
+        self.gait_time_s = ((first + gait.duty_factor) * gait.period_s - gait.transfer_s
+                            - 2 * ctrl.control_period_s)
+        self._last_s = now_s
+        self._stop_s: float | None = None
+        self.phase = WalkPhase.STARTING
+
+    def request_stop(self, now_s: float) -> None:
+        """Zero velocity: the walk takes its last steps and ends on four loaded feet."""
+        if self.phase in (None, WalkPhase.DONE, WalkPhase.STOPPING):
+            return
+        self.target_velocity[:] = 0.0
+        self._stop_s = now_s
+        self.phase = WalkPhase.STOPPING
+
+    # ------------------------------------------------------------------ read-outs
+
+    @property
+    def gait_phase(self) -> float:
+        """Position in the gait cycle, ``[0, 1)``."""
+        return (self.gait_time_s / self.gait.period_s) % 1.0
+
+    @property
+    def swing_legs(self) -> tuple[str, ...]:
+        """Legs in the air now."""
+        return tuple(leg for leg in LEGS if self._legs[leg] in (_Leg.SWING, _Leg.LATE))
+
+    # ------------------------------------------------------------------ the tick
+
+    def advance(self, now_s: float) -> WalkPhase:
+        """Set the controller's references and contacts for time ``now_s`` [s]."""
+        if self.phase is None:
+            raise ConfigurationError("Walking.advance: call start(now_s) first")
+        if self.phase is WalkPhase.DONE:
+            return self.phase
+        dt = max(now_s - self._last_s, 0.0)
+        self._last_s = now_s
+        self._measure(dt)
+        self._follow_command(dt)
+        if not any(state is _Leg.LATE for state in self._legs.values()):
+            self.gait_time_s += dt
+        self._track_body(dt)
+        stepping = self._stepping(now_s)
+        for leg in LEGS:
+            self._advance_leg(leg, dt, stepping)
+        if self.phase is WalkPhase.STOPPING and self._settled():
+            self._finish()
+        return self.phase
+
+    def _yaw(self) -> float:
+        r = self.controller.kinematics.base_rotation
+        return math.atan2(r[1, 0], r[0, 0])
+
+    def _measure(self, dt: float) -> None:
+        ctrl = self.controller
+        velocity = ctrl.kinematics.com_velocity
+        yaw = self._yaw()
+        heading = yaw_rotation(-yaw) @ velocity[:2]
+        omega = ctrl.kinematics.base_rotation @ ctrl.kinematics.v[3:6]
+        self.measured_velocity[:] = heading[0], heading[1], omega[2]
+        self.distance_m += math.hypot(velocity[0], velocity[1]) * dt
+
+    def _follow_command(self, dt: float) -> None:
+        step = np.array([LINEAR_ACCEL, LINEAR_ACCEL, YAW_ACCEL]) * dt
+        change = np.clip(self.target_velocity - self.commanded_velocity, -step, step)
+        self.commanded_velocity += change
+
+    def _command_world(self) -> np.ndarray:
+        """The commanded horizontal velocity (2,) [m/s] in the world frame."""
+        return yaw_rotation(self._yaw_ref) @ self.commanded_velocity[:2]
+
+    def _track_body(self, dt: float) -> None:
+        """The CoM reference moves with the command, the heading turns with the yaw rate."""
+        ctrl = self.controller
+        velocity = np.zeros(3)
+        velocity[:2] = self._command_world()
+        self._com_ref[:2] += velocity[:2] * dt
+        lead = self._com_ref[:2] - ctrl.kinematics.com_position[:2]
+        distance = math.hypot(lead[0], lead[1])
+        if distance > COM_LEAD_M:
+            self._com_ref[:2] -= lead * (1.0 - COM_LEAD_M / distance)
+        ctrl.set_com_target(self._com_ref, velocity)
+        yaw_rate = self.commanded_velocity[2]
+        self._yaw_ref += yaw_rate * dt
+        c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
+        task = ctrl.base_task
+        task.rotation[:] = ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
+        task.reference[1, :] = (0.0, 0.0, yaw_rate)
+
+    def _stepping(self, now_s: float) -> bool:
+        """Whether new steps start: always, except when a stop has slowed the robot."""
+        if self.phase is not WalkPhase.STOPPING or self._stop_s is None:
+            return True
+        slow = (math.hypot(*self.measured_velocity[:2]) < STOP_SPEED_MPS
+                and abs(self.measured_velocity[2]) < 0.3)
+        return not (slow or now_s - self._stop_s > STOP_STEPPING_S)
+
+    def _advance_leg(self, leg: str, dt: float, stepping: bool) -> None:
+        ctrl, gait = self.controller, self.gait
+        schedule = ctrl.schedule
+        state = self._legs[leg]
+        cycle, phase = self.clock.cycle(leg, self.gait_time_s)
+        if state is _Leg.STANCE:
+            window = gait.duty_factor - gait.transfer_s / gait.period_s
+            if (stepping and window <= phase < gait.duty_factor
+                    and self._lifted[leg] != cycle and not schedule.is_ramping(leg)):
+                load = max(ctrl.normal_force(leg), schedule.min_normal_force_n)
+                start = min(load, schedule.max_normal_force(leg))
+                remaining = max(self.clock.time_to_liftoff(leg, self.gait_time_s),
+                                ctrl.control_period_s)
+                schedule.ramp_normal_force(leg, 0.0, remaining, from_n=start)
+                self._lifted[leg] = cycle
+                self._legs[leg] = _Leg.UNLOADING
+        elif state is _Leg.UNLOADING:
+            if not stepping:  # a stop: load the foot again rather than lift it
+                schedule.ramp_normal_force(leg, schedule.full_normal_force_n, gait.transfer_s)
+                self._legs[leg] = _Leg.STANCE
+            elif phase >= gait.duty_factor or cycle != self._lifted[leg]:
+                schedule.set_swing(leg)
+                foot = ctrl.foot_positions()[LEGS.index(leg)]
+                self._starts[leg] = foot.copy()
+                self._ground[leg] = float(foot[2])
+                self._legs[leg] = _Leg.SWING
+                if self.phase is WalkPhase.STARTING:
+                    self.phase = WalkPhase.WALKING
+                self._swing(leg, cycle, phase)
+        elif state is _Leg.SWING:
+            self._swing(leg, cycle, phase)
+        else:  # LATE: keep going down until the foot meets the ground
+            target = self._late_target[leg]
+            target[2] -= LATE_SPEED_MPS * dt
+            ctrl.set_foot_target(leg, target, np.array([0.0, 0.0, -LATE_SPEED_MPS]),
+                                 clamp_to_reach=True)
+            self._late_s[leg] += dt
+            if self._landed(leg) or self._late_s[leg] >= LATE_MAX_S:
+                self._touch_down(leg)
+
+    def _swing(self, leg: str, cycle: int, phase: float) -> None:
+        ctrl, gait = self.controller, self.gait
+        done = cycle != self._lifted[leg]  # the clock passed the touch-down
+        progress = 1.0 if done else (phase - gait.duty_factor) / (1.0 - gait.duty_factor)
+        if progress < 0.85:  # the foothold is fixed for the last part of the swing
+            left = (1.0 - progress) * gait.swing_s
+            xy = self.planner.foothold(
+                leg, com_xy=ctrl.kinematics.com_position[:2], yaw_rad=self._yaw(),
+                velocity_cmd=self._command_world(),
+                velocity=ctrl.kinematics.com_velocity[:2].copy(),
+                yaw_rate_cmd=self.commanded_velocity[2], time_to_touchdown_s=left,
+                stance_s=gait.stance_s)
+            self.footholds[leg] = np.array([xy[0], xy[1],
+                                            self._ground[leg] - gait.touchdown_press_m])
+        path = swing_reference(self._path, self._starts[leg], self.footholds[leg],
+                               height_m=gait.swing_height_m, progress=progress,
+                               duration_s=gait.swing_s)
+        ctrl.set_foot_target(leg, path[0], path[1], path[2], clamp_to_reach=True)
+        if progress >= 0.5 and self._landed(leg):
+            self._touch_down(leg)  # early, or on time
+        elif done:
+            self._late_target[leg] = path[0].copy()
+            self._late_s[leg] = 0.0
+            self._legs[leg] = _Leg.LATE
+
+    def _landed(self, leg: str) -> bool:
+        """The foot is down: within :data:`TOUCH_M` of the ground it left from."""
+        z = self.controller.kinematics.frame_position[LEGS.index(leg), 2]
+        return bool(z <= self._ground[leg] + TOUCH_M)
+
+    def _touch_down(self, leg: str) -> None:
+        schedule = self.controller.schedule
+        schedule.set_stance(leg, max_normal_force_n=0.0)
+        schedule.ramp_normal_force(leg, schedule.full_normal_force_n, self.gait.transfer_s)
+        self._legs[leg] = _Leg.STANCE
+        self.footholds.pop(leg, None)
+
+    def _settled(self) -> bool:
+        schedule = self.controller.schedule
+        return (all(state is _Leg.STANCE for state in self._legs.values())
+                and not any(schedule.is_ramping(leg) for leg in LEGS)
+                and not self._stepping(self._last_s))
+
+    def _finish(self) -> None:
+        ctrl = self.controller
+        ctrl.schedule.min_stance = self._min_stance
+        ctrl.com_task.set_weight(self._com_weight)
+        com = ctrl.com_position()
+        self._com_ref[:2] = com[:2]
+        ctrl.set_com_target(self._com_ref)
+        ctrl.base_task.reference[1, :] = 0.0
+        self.commanded_velocity[:] = 0.0
+        self.phase = WalkPhase.DONE
