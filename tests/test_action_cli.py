@@ -141,7 +141,7 @@ def test_a_rejected_goal_prints_the_code_and_reason_and_exits_3():
       "time_from_start")),
     (["high5", "{}"],
      ("ACTION: no action named 'high5'; served actions: follow_joint_trajectory, high_five, "
-      "sit, stand")),
+      "sit, stand, walk")),
     (["/high_five", "go2_interfaces/action/Stand", "{target_height: 0.4}"],
      ("TYPE: the 'high_five' action is of type go2_interfaces/action/HighFive; received "
       "go2_interfaces/action/Stand")),
@@ -149,8 +149,8 @@ def test_a_rejected_goal_prints_the_code_and_reason_and_exits_3():
      ("TYPE: unknown action type 'go2_interfaces/action/FollowJointTrajectory' "
       "(FollowJointTrajectory is control_msgs/action/FollowJointTrajectory); valid action "
       "types: control_msgs/action/FollowJointTrajectory, go2_interfaces/action/HighFive, "
-      "go2_interfaces/action/Sit, go2_interfaces/action/Stand (or the last part alone, e.g. "
-      "Stand)")),
+      "go2_interfaces/action/Sit, go2_interfaces/action/Stand, go2_interfaces/action/Walk (or "
+      "the last part alone, e.g. Walk)")),
     (["high_five", "go2_interfaces/action/HighFive"],
      ("GOAL: 'go2_interfaces/action/HighFive' is an action type "
       "(go2_interfaces/action/HighFive), not a goal; expected ACTION [TYPE] GOAL together, "
@@ -170,7 +170,8 @@ def test_actions_lists_what_the_simulated_go2_serves_with_types():
     assert out == ("follow_joint_trajectory [control_msgs/action/FollowJointTrajectory]\n"
                    "high_five [go2_interfaces/action/HighFive]\n"
                    "sit [go2_interfaces/action/Sit]\n"
-                   "stand [go2_interfaces/action/Stand]\n")
+                   "stand [go2_interfaces/action/Stand]\n"
+                   "walk [go2_interfaces/action/Walk]\n")
     runner = ControlLoop.simulated().runner  # the list is the served one
     assert {name: runner.server(name).action_type for name in runner.server_names} == (
         GO2_ACTIONS)
@@ -192,10 +193,10 @@ def test_interface_of_every_type_and_an_unknown_name(capsys):
     line = usage_error(["interface", "foo"], capsys)
     assert line == (
         "go2-wbc interface: error: ACTION: no action or interface named 'foo'; actions: "
-        "follow_joint_trajectory, high_five, sit, stand; interfaces: "
+        "follow_joint_trajectory, high_five, sit, stand, walk; interfaces: "
         "control_msgs/action/FollowJointTrajectory, go2_interfaces/action/HighFive, "
-        "go2_interfaces/action/Sit, go2_interfaces/action/Stand (or the last part alone, e.g. "
-        "HighFive) (see 'go2-wbc interface --help')")
+        "go2_interfaces/action/Sit, go2_interfaces/action/Stand, go2_interfaces/action/Walk (or "
+        "the last part alone, e.g. HighFive) (see 'go2-wbc interface --help')")
 
 
 def exit_code_table() -> dict[int, str]:

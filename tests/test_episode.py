@@ -53,7 +53,8 @@ FollowJointTrajectoryGoal = GO2_ACTIONS["follow_joint_trajectory"].Goal
     ({"controller_params": {"shaping.swing_kp": -1.0}}, "controller_params",
      "shaping.swing_kp: expected a value in [0, 500], received -1"),
     ({"action": "jump"}, "action",
-     "unknown action 'jump'; valid actions: follow_joint_trajectory, high_five, sit, stand"),
+     ("unknown action 'jump'; valid actions: follow_joint_trajectory, high_five, sit, stand, "
+      "walk")),
     ({"action": "stand"}, "goal",
      ("expected a StandGoal for the 'stand' action, received HighFiveGoal(target_height=0.4, "
       "hold_seconds=2)")),

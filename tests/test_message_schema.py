@@ -152,7 +152,7 @@ def test_a_new_file_beside_the_shipped_ones_becomes_an_action_type(tmp_path):
         "int32 waves\n---\nbool success\nstring message\n---\nJointTrajectoryPoint pose\n")
     found = action_types_in(tmp_path, package="go2_interfaces",
                             types=_nested(FollowJointTrajectoryGoal))
-    assert sorted(found) == ["FollowJointTrajectory", "HighFive", "Sit", "Stand", "Wave"]
+    assert sorted(found) == ["FollowJointTrajectory", "HighFive", "Sit", "Stand", "Walk", "Wave"]
     wave = found["Wave"]
     assert wave.type_name == "go2_interfaces/action/Wave"
     assert wave.Feedback().pose == JointTrajectoryPoint()

@@ -113,7 +113,7 @@ def check_message(cls: type, definition: MessageDefinition, checked: set[str]) -
 
 def test_every_shipped_action_has_an_action_type_and_back() -> None:
     assert {path.stem for path in ACTION_FILES} == set(ACTION_TYPES)
-    assert {"HighFive", "FollowJointTrajectory", "Stand", "Sit"} == set(ACTION_TYPES)
+    assert {"HighFive", "FollowJointTrajectory", "Stand", "Sit", "Walk"} == set(ACTION_TYPES)
     for name, action_type in ACTION_TYPES.items():
         assert action_type.interface_path == INTERFACES_DIR / f"{name}.action"
 

@@ -1,4 +1,5 @@
-"""The GO2's action servers on one runner: high_five, stand, sit, follow_joint_trajectory.
+"""The GO2's action servers on one runner: high_five, stand, sit, follow_joint_trajectory,
+walk; and the velocity stream (``cmd_vel``) that sends walk goals.
 
 Each action is one line of :data:`GO2_SERVED`: its name, its interface (made from its
 ``.action`` file, :mod:`actions.go2.go2_interfaces`), its behaviour and its goal check. Adding
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
+from actions.action_client import ActionClient
 from actions.action_runner import ActionRunner
 from actions.action_server import ActionServer, Decision
 from actions.action_type import ActionType
@@ -26,6 +28,7 @@ from actions.go2.go2_interfaces import (
     HIGH_FIVE,
     SIT,
     STAND,
+    WALK,
     SitFeedback,
     SitResult,
     StandFeedback,
@@ -38,12 +41,19 @@ from actions.go2.high_five_behaviour import (
 )
 from actions.go2.pose_behaviour import PoseBehaviour, validate_pose_goal
 from actions.go2.robot_context import RobotContext
+from actions.go2.walk_behaviour import (
+    ROBOT_WALKING,
+    WalkBehaviour,
+    stream_goal,
+    validate_walk_goal,
+)
 from actions.responses import GoalResponse, Rejection
 from actions.ros_interfaces.control_msgs import FOLLOW_JOINT_TRAJECTORY
 
 #: Action names served for the GO2.
 HIGH_FIVE_ACTION, STAND_ACTION, SIT_ACTION = "high_five", "stand", "sit"
 FOLLOW_JOINT_TRAJECTORY_ACTION = "follow_joint_trajectory"
+WALK_ACTION = "walk"
 
 
 @dataclass(frozen=True)
@@ -68,20 +78,25 @@ class Go2Action:
 
     def serve(self, runner: ActionRunner, context: RobotContext) -> ActionServer:
         """The action's server on ``runner``, its behaviours and goal checks on ``context``."""
-        goal_callback = partial(_gated, context, self.goal_callback)
+        goal_callback = partial(_gated, context, self.goal_callback, self.name == WALK_ACTION)
         return ActionServer(runner, self.interface, self.name, partial(self.behaviour, context),
                             goal_callback=goal_callback, max_unwind_s=self.max_unwind_s)
 
 
 def _gated(context: RobotContext, callback: Callable[[RobotContext, Any], Decision] | None,
-           goal: Any) -> Decision:
+           walk: bool, goal: Any) -> Decision:
     """A goal refused while the loop has no trustworthy state (``context.goal_refusal``),
-    else ``callback``'s decision (accepted when there is none)."""
+    a goal other than a ``walk`` (``walk`` False) refused while the robot walks, else
+    ``callback``'s decision (accepted when there is none)."""
     if context.goal_refusal:
         if context.admit_once is not None and isinstance(goal, context.admit_once):
             context.admit_once = None
         else:
             return Rejection(ROBOT_NOT_READY, f"robot not able: {context.goal_refusal}")
+    if context.walking and not walk:
+        return Rejection(ROBOT_WALKING, (
+            f"robot walking (for {context.walking}): stop it first (cancel the walk goal, or "
+            "send a zero velocity command); it stops on four feet within a second"))
     return GoalResponse.ACCEPT if callback is None else callback(context, goal)
 
 
@@ -96,6 +111,7 @@ GO2_SERVED: tuple[Go2Action, ...] = (
         phase_name="sitting"), validate_pose_goal),
     Go2Action(FOLLOW_JOINT_TRAJECTORY_ACTION, FOLLOW_JOINT_TRAJECTORY,
               FollowJointTrajectoryBehaviour, validate_follow_joint_trajectory_goal),
+    Go2Action(WALK_ACTION, WALK, WalkBehaviour, validate_walk_goal),
 )
 #: What :func:`make_go2_runner` serves, action name -> interface, for listing the actions
 #: without building a robot (``go2-wbc actions``).
@@ -108,9 +124,11 @@ def make_go2_runner(context: RobotContext, *,
     """An :class:`ActionRunner` serving the GO2's actions on ``context``'s robot.
 
     One goal runs at a time; ``busy_policy`` says what a goal for a busy robot gets
-    (rejected, or the running goal is preempted: see :class:`BusyPolicy`).
+    (rejected, or the running goal is preempted: see :class:`BusyPolicy`). The context's
+    velocity stream sends its walk goals to the runner's ``walk`` server.
     """
     runner = ActionRunner(busy_policy=busy_policy)
     for action in GO2_SERVED:
         action.serve(runner, context)
+    context.velocity_stream.attach(ActionClient(runner, WALK_ACTION).send_goal_async, stream_goal)
     return runner

@@ -1,5 +1,5 @@
-"""The GO2's own action interfaces (``go2_interfaces``): HighFive, Stand and Sit, and every
-action type the library ships.
+"""The GO2's own action interfaces (``go2_interfaces``): HighFive, Stand, Sit and Walk, and
+every action type the library ships.
 
 ``actions/interfaces/*.action`` define them. The message classes are declared here so that
 type checkers and editors see their fields (``HighFiveGoal(target_height=...)``), and each is
@@ -126,9 +126,66 @@ class SitFeedback(PhaseFeedback):
     __slots__ = ()
 
 
+@dataclass(slots=True)
+class WalkGoal(Message):
+    """Goal of Walk: trot at a velocity (base heading frame) for a duration or a distance.
+
+    Attributes:
+        forward_mps: Forward velocity [m/s].
+        lateral_mps: Leftward velocity [m/s].
+        yaw_rate_radps: Turning rate, counter-clockwise seen from above [rad/s].
+        duration_s: Walk this long [s], then stop; 0 when ``distance_m`` is given.
+        distance_m: Walk this path length [m], then stop; 0 when ``duration_s`` is given.
+    """
+
+    forward_mps: float = 0.0
+    lateral_mps: float = 0.0
+    yaw_rate_radps: float = 0.0
+    duration_s: float = 0.0
+    distance_m: float = 0.0
+
+
+@dataclass(slots=True)
+class WalkResult(Message):
+    """Result of Walk.
+
+    Attributes:
+        success: Whether the walk ended as asked, on four loaded feet.
+        message: A readable account.
+        distance_m: Path length travelled from the start to the stop [m].
+    """
+
+    success: bool = False
+    message: str = ""
+    distance_m: float = 0.0
+
+
+@dataclass(slots=True)
+class WalkFeedback(Message):
+    """Feedback of Walk.
+
+    Attributes:
+        phase: ``standing``, ``starting``, ``walking``, ``stopping``, ``complete``,
+            ``canceled`` or ``aborted``.
+        progress: 0.0 -> 1.0 of the duration or the distance, never decreasing.
+        gait_phase: Position in the gait cycle, 0.0 -> 1.0.
+        distance_m: Path length travelled so far [m].
+        forward_mps, lateral_mps: Measured velocity (the state estimate) [m/s].
+        yaw_rate_radps: Measured turning rate [rad/s].
+    """
+
+    phase: str = ""
+    progress: float = 0.0
+    gait_phase: float = 0.0
+    distance_m: float = 0.0
+    forward_mps: float = 0.0
+    lateral_mps: float = 0.0
+    yaw_rate_radps: float = 0.0
+
+
 _G = TypeVar("_G", bound=Message)
-_R = TypeVar("_R", bound=BehaviourResult)
-_F = TypeVar("_F", bound=PhaseFeedback)
+_R = TypeVar("_R", bound=Message)
+_F = TypeVar("_F", bound=Message)
 
 
 def _go2_action(
@@ -143,13 +200,14 @@ def _go2_action(
 HIGH_FIVE = _go2_action("HighFive", HighFiveGoal, HighFiveResult, HighFiveFeedback)
 STAND = _go2_action("Stand", StandGoal, StandResult, StandFeedback)
 SIT = _go2_action("Sit", SitGoal, SitResult, SitFeedback)
+WALK = _go2_action("Walk", WalkGoal, WalkResult, WalkFeedback)
 
 #: Every action type shipped with the library, by interface name: one per ``.action`` file
 #: of :data:`~actions.action_type.INTERFACES_DIR` (those above, control_msgs'
 #: FollowJointTrajectory, and any other file there, its classes built from the file).
 ACTION_TYPES: dict[str, ActionType] = action_types_in(
     INTERFACES_DIR, package=GO2_INTERFACES_PACKAGE,
-    known=(HIGH_FIVE, FOLLOW_JOINT_TRAJECTORY, STAND, SIT),
+    known=(HIGH_FIVE, FOLLOW_JOINT_TRAJECTORY, STAND, SIT, WALK),
     types=(Header, Vector3, Quaternion, Transform, Twist, JointTrajectoryPoint, JointTrajectory,
            MultiDOFJointTrajectoryPoint, MultiDOFJointTrajectory, JointTolerance,
            JointComponentTolerance))

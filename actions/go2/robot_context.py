@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from actions.go2.velocity_stream import VelocityStream
 from wbc.controller.balance_controller import BalanceController
 from wbc.controller.control_output import ControlOutput, ControlStatus
 from wbc.model.description import LEGS
@@ -48,6 +49,11 @@ class RobotContext:
         #: One goal of this type is let through despite :attr:`goal_refusal` (the loop's own
         #: recovery stand); cleared when it is.
         self.admit_once: type | None = None
+        #: What the robot is walking for ('' when it is not): goals other than a walk are
+        #: refused while it walks (set and cleared by the Walk behaviour).
+        self.walking = ""
+        #: The streaming velocity command (``cmd_vel``) and the walks it starts.
+        self.velocity_stream = VelocityStream()
         #: Rows of ``foot_positions()`` that make each support polygon seen so far.
         self._support_rows: dict[tuple[str, ...], np.ndarray] = {}
         self._weight_n = controller.description.total_mass * _GRAVITY  # [N]

@@ -81,3 +81,25 @@ class ControlLoop(RobotLoop):
         """
         super().__init__(robot, controller, behaviours=behaviours, busy_policy=busy_policy,
                          aliases=aliases, state=state, estimator=estimator, fallback=fallback)
+
+    def command_velocity(self, forward_mps: float, lateral_mps: float, yaw_rate_radps: float,
+                         *, timeout_s: float | None = None) -> None:
+        """Stream a velocity command (``cmd_vel``, base heading frame); any thread.
+
+        A command that is not zero starts a walk when the robot is idle (a ``walk`` goal; the
+        robot stands up first if it is not standing) and steers the walk it started; a zero
+        command, or no command for ``timeout_s`` of the loop's own time (simulated time in
+        simulation), stops it on four loaded feet. While another goal runs, the walk is
+        refused (``velocity_stream.refusal`` says why).
+
+        Args:
+            forward_mps, lateral_mps: Velocity [m/s]; yaw_rate_radps: turning rate [rad/s].
+            timeout_s: Robot time [s] without a newer command after which the robot stops
+                (default ``velocity_stream.timeout_s``, 0.5 s).
+
+        Raises:
+            ConfigurationError: A component beyond the walking limits, or a bad timeout (the
+                message names the field, the value and the valid range).
+        """
+        self.context.velocity_stream.command(forward_mps, lateral_mps, yaw_rate_radps,
+                                             timeout_s=timeout_s)
