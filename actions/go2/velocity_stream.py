@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import is_finite_real
+from wbc.locomotion.gait import VelocityLimits
 
 if TYPE_CHECKING:
     from actions.client_goal_handle import ClientGoalHandle
@@ -32,26 +33,11 @@ DEFAULT_TIMEOUT_S = 0.5
 MAX_TIMEOUT_S = 10.0
 
 
-@dataclass(frozen=True)
-class VelocityLimits:
-    """Largest velocity magnitudes a command may ask for (each axis both ways).
-
-    Attributes:
-        forward_mps: Forward and backward [m/s].
-        lateral_mps: Left and right [m/s].
-        yaw_rate_radps: Turning rate either way [rad/s].
-    """
-
-    forward_mps: float = 1.0
-    lateral_mps: float = 0.5
-    yaw_rate_radps: float = 1.5
-
-
-def velocity_problem(limits: Any, forward_mps: Any, lateral_mps: Any,
+def velocity_problem(limits: VelocityLimits, forward_mps: Any, lateral_mps: Any,
                      yaw_rate_radps: Any) -> str:
     """Why a velocity command is not valid ('' when it is): the field, the value received and
-    the valid range from ``limits`` (any object with the three fields of
-    :class:`VelocityLimits`)."""
+    the valid range from ``limits`` (:class:`wbc.locomotion.gait.VelocityLimits`: each axis
+    both ways)."""
     for name, value, limit, unit in (
             ("forward_mps", forward_mps, limits.forward_mps, "m/s"),
             ("lateral_mps", lateral_mps, limits.lateral_mps, "m/s"),
@@ -92,11 +78,13 @@ class VelocityStream:
     callback); the walk behaviour reads :meth:`latest` on the control tick.
 
     Args:
-        limits: What a command may ask for (default :class:`VelocityLimits`).
+        limits: What a command may ask for (default: the walking motion's,
+            :class:`wbc.locomotion.gait.VelocityLimits`).
         timeout_s: Default timeout [s] of a command.
     """
 
-    def __init__(self, limits: Any = None, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> None:
+    def __init__(self, limits: VelocityLimits | None = None, *,
+                 timeout_s: float = DEFAULT_TIMEOUT_S) -> None:
         _check_timeout(timeout_s)
         self.limits = limits if limits is not None else VelocityLimits()
         self.timeout_s = float(timeout_s)

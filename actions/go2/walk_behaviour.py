@@ -18,6 +18,7 @@ from actions.go2.velocity_stream import VelocityCommand, velocity_problem
 from actions.responses import GoalResponse, Rejection
 from wbc.controller.balance_controller import BalanceController
 from wbc.core.errors import WbcError
+from wbc.locomotion.walking import Walking
 from wbc.motions.posture_transition import PostureTransition, TransitionPhase
 
 #: Longest walk [s] a goal may ask for (a distance too, at the goal's speed).
@@ -57,9 +58,8 @@ class WalkingMotion(Protocol):
 
 
 def default_walking(controller: BalanceController) -> WalkingMotion:
-    """The library's walking motion on ``controller`` (:class:`wbc.locomotion.Walking`)."""
-    from wbc.locomotion.walking import Walking
-
+    """The library's walking motion on ``controller`` (:class:`wbc.locomotion.Walking`, its
+    default gait and limits: those the velocity stream and the goal check use)."""
     return Walking(controller)
 
 
