@@ -258,6 +258,20 @@ def test_a_stop_that_never_ends_aborts(robot, monkeypatch):
     assert wrapped.result.message == "aborted: not on four loaded feet 2 s after the stop"
 
 
+def test_the_end_waits_for_the_base_to_come_to_rest(robot):
+    handle = robot.send("walk", WalkGoal(forward_mps=0.5, duration_s=0.5))
+    robot.run(0.9)  # the stop was asked at 0.51 and ended at 0.91
+    v = np.zeros(18)
+    v[:2] = [0.2, 0.1]  # the estimate still moving
+    robot.context.observe(robot.now, robot.context.q, v)
+    robot.run(0.4)
+    assert handle.status is GoalStatus.EXECUTING  # 0.15 s passed, but not at rest
+    robot.run(0.1)
+    wrapped = robot.result(handle)  # 0.5 s after the motion's end: over, the speed said
+    assert wrapped.status is GoalStatus.SUCCEEDED
+    assert wrapped.result.message.endswith("on four loaded feet, base still at 0.22 m/s")
+
+
 def test_stands_up_first_when_lying(robot):
     robot.context.observe(0.0, Go2Description.default().pose("lying"), np.zeros(18))
     feedback: list = []
@@ -309,10 +323,10 @@ def test_stream_starts_a_walk_steers_it_and_stops_after_its_timeout(robot):
     assert walking.calls[-1][0] == "set_velocity"  # the newest command, seen at 1.02
     robot.run(DT)
     assert walking.calls[-1] == ("request_stop", 1.52)  # 0.5 s after the tick that saw it
-    robot.run(0.5)
+    robot.run(0.55)
     assert not stream.walking and robot.context.walking == ""
     ended = [e for e in robot.runner.event_log if e.event == "succeeded"]
-    assert len(ended) == 1 and ended[0].now_s == 1.92 and (
+    assert len(ended) == 1 and ended[0].now_s == 2.07 and (  # 0.4 s stop, 0.15 s settling
         "walk done: stopped: no velocity command for 0.5 s (its timeout), " in ended[0].detail)
     assert len(ScriptedWalking.made) == 1
 
@@ -335,11 +349,11 @@ def test_a_zero_command_stops_and_a_newer_one_walks_again(robot):
     first = ScriptedWalking.made[0]
     assert first.calls[-1] == ("request_stop", 0.31)
     stream.command(-0.2, 0.0, 0.0)  # while stopping: the next walk once this one ended
-    robot.run(0.3)
+    robot.run(0.5)
     assert len(ScriptedWalking.made) == 1
-    robot.run(0.2)
-    second = ScriptedWalking.made[1]
-    assert second.calls[:2] == [("start", 0.72), ("set_velocity", -0.2, 0.0, 0.0)]
+    robot.run(0.1)
+    second = ScriptedWalking.made[1]  # the first ended at 0.86: 0.4 s stop, 0.15 s settling
+    assert second.calls[:2] == [("start", 0.87), ("set_velocity", -0.2, 0.0, 0.0)]
 
 
 def test_a_zero_command_when_idle_starts_nothing(robot):

@@ -37,6 +37,11 @@ MIN_WALKING_HEIGHT_M = 0.18
 MAX_STOP_S = 2.0
 #: Consecutive damping fallbacks [ticks] after which the goal ends at once.
 FAULT_LIMIT_TICKS = 50
+#: After the last step the goal ends once the base is slower than ``REST_SPEED_MPS`` [m/s]
+#: (the estimate) and ``SETTLE_S`` [s] has passed, or after ``MAX_SETTLE_S`` [s]: the walking
+#: motion is done when its last foot is commanded loaded, and on the simulated GO2 that foot
+#: was seen to carry its load about 0.1 s later.
+REST_SPEED_MPS, SETTLE_S, MAX_SETTLE_S = 0.05, 0.15, 0.5
 
 
 class WalkingMotion(Protocol):
@@ -125,6 +130,8 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         self._stamp_s = 0.0  # robot time [s] the newest stream command was first seen
         self._walk_start_s = math.nan
         self._stop_s = math.nan
+        self._stop_distance_m = 0.0  # the path [m] walked when the stop was asked
+        self._done_s = math.nan  # robot time [s] the walking motion was done
         self._stop_why = ""  # why the walk stops: its aim reached, the stream's stop
         self._cancel_reason = ""
         self._abort_reason = ""
@@ -188,6 +195,12 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
                     f"aborted: not on four loaded feet {MAX_STOP_S:g} s after the stop"
                     + (f" ({self._abort_reason})" if self._abort_reason else "")))
             return StepResult.running(self._feedback(now_s, name))
+        if math.isnan(self._done_s):
+            self._done_s = now_s
+        settled_s = now_s - self._done_s
+        if settled_s < MAX_SETTLE_S - 1e-9 and (
+                settled_s < SETTLE_S - 1e-9 or self._speed() >= REST_SPEED_MPS):
+            return StepResult.running(self._feedback(now_s, "stopping"))
         return self._finished(now_s)
 
     def cancel(self, now_s: float, reason: str) -> None:
@@ -222,7 +235,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     def _request_stop(self, now_s: float) -> None:
         if not self._stopping and self.walking is not None and self._walk_started:
-            self._stop_s = now_s
+            self._stop_s, self._stop_distance_m = now_s, self._distance()
             self.walking.request_stop(now_s)
 
     @property
@@ -290,15 +303,22 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         walked_s = self._stop_s - self._walk_start_s
         why = f"stopped: {self._stop_why}" if self._stream else (
             f"walked {walked_s:.2f} s" if self.goal.duration_s > 0.0 else
-            f"walked {self.walking.distance_m:.2f} m of {self.goal.distance_m:g} m")
+            f"walked {self._stop_distance_m:.2f} m of {self.goal.distance_m:g} m")
         return self._end("complete", now_s, (
             f"walk done: {why}, {distance:.2f} m in all, {feet}"), success=True)
 
+    def _speed(self) -> float:
+        """The base's horizontal speed [m/s] (the state estimate)."""
+        v = self.context.v
+        return math.hypot(v.item(0), v.item(1))
+
     def _loaded_feet(self) -> str:
-        """The feet the controller loads at the end, in words."""
+        """The feet the controller loads at the end, and the base's speed, in words."""
         legs = self.context.controller.schedule.support_legs()
-        return "on four loaded feet" if len(legs) == 4 else (
+        feet = "on four loaded feet" if len(legs) == 4 else (
             f"on {len(legs)} loaded feet ({', '.join(legs)})")
+        speed = self._speed()
+        return feet if speed < REST_SPEED_MPS else f"{feet}, base still at {speed:.2f} m/s"
 
     def _distance(self) -> float:
         return float(self.walking.distance_m) if self.walking is not None and (
