@@ -165,18 +165,34 @@ class MotorCommandShaper:
         self._friction = np.asarray(settings.known_joint_friction, dtype=float)[types]
         self.kp = np.full(n, settings.stance_kp)
         self.kd = np.full(n, settings.stance_kd)
+        self._stance = np.ones(n, dtype=bool)
         self._out_shape = (6, n)
-        reference = self.reference
+        self._bind()
+
+    def _bind(self) -> None:
+        settings, reference = self.settings, self.reference
         self._shape = _bind_shape(
             JointShaping(self._damping, self._friction, self.tau_max, self.effort_limit,
                          self.kp, self.kd, float(settings.friction_velocity_scale_rad_s)),
             ReferenceState(reference.q_des, reference.dq_des, reference.max_position_error,
                            reference.max_velocity_error))
 
+    def retune(self, settings: ShapingSettings) -> None:
+        """Take the gains, leaks and reference bounds of ``settings`` (a walk's faster swing
+        tracking, and back), each joint keeping its stance or swing; the known friction
+        stays as built."""
+        self.settings = settings
+        self.reference.max_position_error = settings.reference_position_bound_rad
+        self.reference.max_velocity_error = settings.reference_velocity_bound_rad_s
+        for stance in (True, False):
+            self.set_stance(np.flatnonzero(self._stance == stance).tolist(), stance)
+        self._bind()
+
     def set_stance(self, joints: Sequence[int], stance: bool) -> None:
         """Give a leg's joints (their indices) the stance or the swing gains and leak."""
         cfg = self.settings
         joints = list(joints)
+        self._stance[joints] = stance
         self.kp[joints] = cfg.stance_kp if stance else cfg.swing_kp
         self.kd[joints] = cfg.stance_kd if stance else cfg.swing_kd
         self.reference.set_leak_time(

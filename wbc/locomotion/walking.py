@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import enum
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -47,6 +48,16 @@ COM_LEAD_M = 0.06
 #: Weight of the CoM task while walking: ten times the standing default, so that the QP
 #: does not lift the body to help a swinging foot up (it did by 2-3 cm a step at 20).
 COM_WEIGHT = 200.0
+#: Swing joints' driver damping [N m s/rad] and the bound of the desired joint velocity's
+#: lead [rad/s] while walking (standing: 2 and 1): a 0.2 s swing moves the joints at up
+#: to 10 rad/s, where joint damping the model lacks (2 N m s/rad on the default plant) lags
+#: the foot 4 cm and the foot tasks lift the body to make up for it; with these the lag is
+#: 1.5 cm and the base holds its height.
+SWING_KD, VELOCITY_LEAD_RAD_S = 4.0, 4.0
+#: Rate [1/s] at which the CoM height target integrates the base height's error: the CoM
+#: task holds the whole body's CoM, and the legs' swings and the stance legs' compliance
+#: leave the base about 1 cm off its height without it.
+HEIGHT_KI, HEIGHT_TRIM_M = 2.0, 0.03
 #: Stop stepping once slower than this [m/s] (or after STOP_STEPPING_S), then settle.
 STOP_SPEED_MPS, STOP_STEPPING_S = 0.12, 0.6
 
@@ -133,12 +144,21 @@ class Walking:
         self.planner = FootholdPlanner(offsets, com_height_m=height,
                                        max_step_m=min(0.2, 0.8 * reach))
         self._com_ref = com.copy()
+        self._com_height = float(com[2])
+        #: The base height [m] above the ground that walking holds: the height at the start.
+        self.base_height_m = float(ctrl.kinematics.base_position[2]) - ground
+        self._trim = 0.0
         self._yaw_ref = yaw
         self._ground = {leg: float(feet[i, 2]) for i, leg in enumerate(LEGS)}
         self._lifted = dict.fromkeys(LEGS, -10)
         self._min_stance = ctrl.schedule.min_stance
         ctrl.schedule.min_stance = 2
         self._com_weight = ctrl.com_task.weight
+        self._shaping = shaping = ctrl.motor.settings
+        ctrl.motor.retune(replace(
+            shaping, swing_kd=max(SWING_KD, shaping.swing_kd),
+            reference_velocity_bound_rad_s=max(VELOCITY_LEAD_RAD_S,
+                                               shaping.reference_velocity_bound_rad_s)))
         ctrl.com_task.set_weight(max(COM_WEIGHT, self._com_weight))
         gait = self.gait
         # The first lift-off one transfer (and a tick) from now: the leg of offset 0.5 (FR
@@ -224,6 +244,10 @@ class Walking:
         distance = math.hypot(lead[0], lead[1])
         if distance > COM_LEAD_M:
             self._com_ref[:2] -= lead * (1.0 - COM_LEAD_M / distance)
+        height = ctrl.kinematics.base_position[2] - self._ground_now()
+        self._trim = min(max(self._trim + HEIGHT_KI * (self.base_height_m - height) * dt,
+                             -HEIGHT_TRIM_M), HEIGHT_TRIM_M)
+        self._com_ref[2] = self._com_height + self._trim
         ctrl.set_com_target(self._com_ref, velocity)
         yaw_rate = self.commanded_velocity[2]
         self._yaw_ref += yaw_rate * dt
@@ -231,6 +255,13 @@ class Walking:
         task = ctrl.base_task
         task.rotation[:] = ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
         task.reference[1, :] = (0.0, 0.0, yaw_rate)
+
+    def _ground_now(self) -> float:
+        """The ground's height [m] under the robot: the stance feet's mean, less the foot radius
+        is left in (every height here is of the foot sphere's centre)."""
+        feet = self.controller.kinematics.frame_position
+        rows = [i for i, leg in enumerate(LEGS) if self._legs[leg] is _Leg.STANCE]
+        return float(np.mean(feet[rows, 2])) if rows else float(np.mean(feet[:4, 2]))
 
     def _stepping(self, now_s: float) -> bool:
         """Whether new steps start: always, except when a stop has slowed the robot."""
@@ -327,6 +358,7 @@ class Walking:
         ctrl = self.controller
         ctrl.schedule.min_stance = self._min_stance
         ctrl.com_task.set_weight(self._com_weight)
+        ctrl.motor.retune(self._shaping)
         com = ctrl.com_position()
         self._com_ref[:2] = com[:2]
         ctrl.set_com_target(self._com_ref)
