@@ -16,6 +16,7 @@ from actions import (
     JointTrajectoryPoint,
     SitGoal,
     StandGoal,
+    WalkGoal,
 )
 from actions.action_definition import parse_action_file
 from actions.go2.go2_actions import FOLLOW_JOINT_TRAJECTORY_ACTION, GO2_ACTIONS
@@ -93,6 +94,12 @@ def reported() -> dict[str, set[str]]:
     lying = Goals("lying")
     assert lying.run("high_five", HighFiveGoal(target_height=0.3, hold_seconds=0)) == (
         "SUCCEEDED")
+    assert lying.run("sit", SitGoal(duration_s=1.0)) == "SUCCEEDED"
+    assert lying.run("walk", WalkGoal(forward_mps=0.3, duration_s=1.0)) == "SUCCEEDED"
+    assert lying.run("walk", WalkGoal(forward_mps=0.3, duration_s=3.0),
+                     cancel_after_s=1.0) == "CANCELED"
+    assert lying.run("walk", WalkGoal(forward_mps=0.3, duration_s=3.0),
+                     fault_after_s=1.0) == "ABORTED"
     standing = Goals()
     assert standing.run("high_five", HighFiveGoal(target_height=0.3, hold_seconds=0),
                         cancel_after_s=0.5) == "CANCELED"
@@ -112,7 +119,7 @@ def reported() -> dict[str, set[str]]:
             for name in GO2_ACTIONS}
 
 
-@pytest.mark.parametrize("action_name", ["high_five", "stand", "sit"])
+@pytest.mark.parametrize("action_name", ["high_five", "stand", "sit", "walk"])
 def test_every_phase_reported_is_listed_and_every_listed_one_is_reported(action_name, reported):
     listed = listed_phases(action_name)
     assert len(listed) == len(set(listed))
@@ -127,6 +134,8 @@ def test_the_listed_phases_in_order():
                                       "aborted"]
     assert listed_phases("sit") == ["placing_foot", "sitting", "complete", "canceled",
                                     "aborted"]
+    assert listed_phases("walk") == ["standing", "starting", "walking", "stopping", "complete",
+                                     "canceled", "aborted"]
 
 
 def test_follow_joint_trajectory_feedback_is_control_msgs_with_no_phase():
