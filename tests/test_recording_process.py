@@ -14,9 +14,9 @@ from mcap.reader import make_reader
 
 from actions.robot.recording_process import (
     FRAME_BYTES,
-    FRAME_FLOATS,
     PIPE_BYTES,
     RecordingProcess,
+    SnapshotFrame,
     pack_snapshot,
     unpack_snapshot,
 )
@@ -40,7 +40,7 @@ def _equal(a: object, b: object) -> bool:
 def test_a_snapshot_survives_its_frame(standing, truth):
     s = dataclasses.replace(snapshot(0.125, standing, truth=truth, raised=True), missed=True,
                             qp_ok=False, stages_us={SERIES[0]: 12.5, "tick": 310.0})
-    payload = pack_snapshot(s, np.zeros(FRAME_FLOATS))
+    payload = pack_snapshot(s, SnapshotFrame())
     assert len(payload) + 4 == FRAME_BYTES <= 4096  # PIPE_BUF: a write is all or nothing
     back = unpack_snapshot(payload)
     for field in dataclasses.fields(s):

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from actions.robot.recording_process import RecordingProcess
-from actions.robot.run_recording import Snapshot
 from actions.robot.tick_log import FootTargets
 from actions.robot.tick_stats import SERIES
 from wbc.model.description import LEGS
@@ -44,33 +43,40 @@ class RealtimeRecording:
             self._capture(rt)
 
     def _capture(self, rt: RealtimeLoop) -> None:
+        """The tick's snapshot written into the recording's preallocated frame, then sent."""
         loop = rt.loop
         controller = loop.controller
         if not self._declared:  # once: an isinstance on a protocol costs microseconds
             self._declared = True
             self._targets = controller if isinstance(controller, FootTargets) else None
-        stance = tuple(bool(s) for s in controller.schedule.stance)
-        targets = np.full((len(LEGS), 3), np.nan)
+        frame = self.recording.frame
+        context = loop.context
+        frame.t_s[0] = context.now_s
+        frame.q[:] = context.q
+        frame.v[:] = context.v
+        out = rt.last_output
+        if out is None:
+            frame.tau.fill(math.nan)
+        else:
+            frame.tau[:] = out.tau
+        stance = controller.schedule.stance
+        frame.foot_target.fill(math.nan)
         if self._targets is not None:
             for k, leg in enumerate(LEGS):
                 if not stance[k]:
                     target = self._targets.foot_target(leg)
                     if target is not None:
-                        targets[k] = target
-        out = rt.last_output
+                        frame.foot_target[k] = target
         times = rt.last_times  # the previous tick's, complete
+        frame.tick_us[0] = times[_TICK] * 1e6
+        np.multiply(times, 1e6, out=frame.stages_us)
+        frame.com_margin_m[0] = math.nan
         estimator = loop.estimator
+        if estimator is not None:
+            frame.estimate_contact[:] = estimator.estimate.contact
         goals = loop.runner.active_goals()
-        self.recording.capture(Snapshot(
-            t_s=loop.context.now_s, q=np.array(loop.context.q), v=np.array(loop.context.v),
-            tau=np.full(12, np.nan) if out is None else np.array(out.tau),
-            foot_target=targets, stance=stance,
-            tick_us=float(times[_TICK]) * 1e6, qp_ok=out is not None and bool(out.ok),
+        self.recording.capture_frame(frame.payload(
+            stance=stance, qp_ok=out is not None and bool(out.ok), missed=rt.missed,
+            estimate=estimator is not None, truth=False,
             status="DAMPING" if out is None else out.status.name,
-            phase=(goals[0].server.action_name if goals else rt.rest.phase.name.lower()),
-            estimate_contact=None if estimator is None
-            else np.array(estimator.estimate.contact),
-            missed=rt.missed,
-            stages_us={name: round(float(t) * 1e6, 1) for name, t in zip(SERIES, times,
-                                                                          strict=True)
-                       if math.isfinite(t)}))
+            phase=(goals[0].server.action_name if goals else rt.rest.phase.name.lower())))

@@ -22,6 +22,7 @@ import pickle
 import signal
 import struct
 from collections import deque
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -61,33 +62,63 @@ FRAME_BYTES = _LENGTH.size + 1 + 8 * FRAME_FLOATS + _TEXT_BYTES
 _QP_OK, _MISSED, _ESTIMATE, _TRUTH = 16, 32, 64, 128
 
 
-def pack_snapshot(s: Snapshot, out: np.ndarray) -> bytes:
-    """``s`` as one frame's payload, its floats through ``out`` (a preallocated buffer of
-    ``FRAME_FLOATS``)."""
-    out[_SLICES["t_s"]] = s.t_s
-    out[_SLICES["q"]] = s.q
-    out[_SLICES["v"]] = s.v
-    out[_SLICES["tau"]] = s.tau
-    out[_SLICES["foot_target"]] = s.foot_target.ravel()
-    out[_SLICES["tick_us"]] = s.tick_us
-    out[_SLICES["com_margin_m"]] = s.com_margin_m
-    flags = sum(1 << k for k, stance in enumerate(s.stance) if stance)
-    flags |= (_QP_OK if s.qp_ok else 0) | (_MISSED if s.missed else 0)
+class SnapshotFrame:
+    """One snapshot's frame: a preallocated float buffer with a view per field that the tick
+    writes into (``frame.q[:] = q``), then :meth:`payload` adds the flags and names.
+
+    Views: ``t_s`` (1,) [s], ``q`` (19,), ``v`` (18,), ``tau`` (12,) [N m],
+    ``foot_target`` (4, 3) [m], ``tick_us`` (1,), ``com_margin_m`` (1,),
+    ``estimate_contact`` (4,), ``q_true`` (19,), ``v_true`` (18,), ``force_n`` (4, 3) [N],
+    ``foot_position`` (4, 3) [m], ``stages_us`` (one per :data:`SERIES`; NaN: none).
+    """
+
+    def __init__(self) -> None:
+        self.floats = np.zeros(FRAME_FLOATS)
+        view = {name: self.floats[part] for name, part in _SLICES.items()}
+        self.t_s, self.q, self.v, self.tau = view["t_s"], view["q"], view["v"], view["tau"]
+        self.foot_target = view["foot_target"].reshape(4, 3)
+        self.tick_us, self.com_margin_m = view["tick_us"], view["com_margin_m"]
+        self.estimate_contact = view["estimate_contact"]
+        self.q_true, self.v_true = view["q_true"], view["v_true"]
+        self.force_n = view["force_n"].reshape(4, 3)
+        self.foot_position = view["foot_position"].reshape(4, 3)
+        self.stages_us, self._flags = view["stages_us"], view["flags"]
+
+    def payload(self, *, stance: Sequence[bool], qp_ok: bool, missed: bool, estimate: bool,
+                truth: bool, status: str, phase: str, raised_leg: str = "") -> bytes:
+        """The frame's bytes: the floats as written, whether the estimate's and the truth's
+        fields hold anything, and the names."""
+        flags = sum(1 << k for k, leg_stance in enumerate(stance) if leg_stance)
+        flags |= ((_QP_OK if qp_ok else 0) | (_MISSED if missed else 0)
+                  | (_ESTIMATE if estimate else 0) | (_TRUTH if truth else 0))
+        self._flags[0] = flags
+        text = "\x1f".join((status, phase, raised_leg)).encode()[:_TEXT_BYTES]
+        return _SNAPSHOT + self.floats.tobytes() + text.ljust(_TEXT_BYTES, b"\0")
+
+
+def pack_snapshot(s: Snapshot, frame: SnapshotFrame) -> bytes:
+    """``s`` as one frame's payload, written through ``frame``."""
+    frame.t_s[0] = s.t_s
+    frame.q[:] = s.q
+    frame.v[:] = s.v
+    frame.tau[:] = s.tau
+    frame.foot_target[:] = s.foot_target
+    frame.tick_us[0] = s.tick_us
+    frame.com_margin_m[0] = s.com_margin_m
+    estimate = s.estimate_contact is not None
     if s.estimate_contact is not None:
-        flags |= _ESTIMATE
-        out[_SLICES["estimate_contact"]] = s.estimate_contact
-    if s.q_true is not None and s.v_true is not None and s.force_n is not None \
-            and s.foot_position is not None:
-        flags |= _TRUTH
-        out[_SLICES["q_true"]] = s.q_true
-        out[_SLICES["v_true"]] = s.v_true
-        out[_SLICES["force_n"]] = s.force_n.ravel()
-        out[_SLICES["foot_position"]] = s.foot_position.ravel()
-    stages = s.stages_us
-    out[_SLICES["stages_us"]] = [stages.get(name, math.nan) for name in SERIES]
-    out[_SLICES["flags"]] = flags
-    text = "\x1f".join((s.status, s.phase, s.raised_leg)).encode()[:_TEXT_BYTES]
-    return _SNAPSHOT + out.tobytes() + text.ljust(_TEXT_BYTES, b"\0")
+        frame.estimate_contact[:] = s.estimate_contact
+    truth = not (s.q_true is None or s.v_true is None or s.force_n is None
+                 or s.foot_position is None)
+    if truth:
+        frame.q_true[:] = s.q_true
+        frame.v_true[:] = s.v_true
+        frame.force_n[:] = s.force_n
+        frame.foot_position[:] = s.foot_position
+    frame.stages_us[:] = [s.stages_us.get(name, math.nan) for name in SERIES]
+    return frame.payload(stance=s.stance, qp_ok=s.qp_ok, missed=s.missed, estimate=estimate,
+                         truth=truth, status=s.status, phase=s.phase,
+                         raised_leg=s.raised_leg)
 
 
 def unpack_snapshot(payload: bytes) -> Snapshot:
@@ -101,7 +132,8 @@ def unpack_snapshot(payload: bytes) -> Snapshot:
         a = f[_SLICES[name]].copy()
         return a if shape is None else a.reshape(shape)
 
-    stages = {name: float(t) for name, t in zip(SERIES, f[_SLICES["stages_us"]], strict=True)
+    stages = {name: round(float(t), 1)
+              for name, t in zip(SERIES, f[_SLICES["stages_us"]], strict=True)
               if math.isfinite(t)}
     return Snapshot(
         t_s=float(f[0]), q=get("q"), v=get("v"), tau=get("tau"),
@@ -149,7 +181,8 @@ class RecordingProcess:
         #: full, or the child's own queue).
         self.taken = self.logged = self.dropped = 0
         self._ticks = 0
-        self._floats = np.zeros(FRAME_FLOATS)
+        #: The frame the tick writes its snapshot into (:meth:`capture_frame` sends it).
+        self.frame = SnapshotFrame()
         self._pending: deque[bytes] = deque()
         self._port: int | None = None
         #: What went wrong in the child, if anything ("": nothing).
@@ -193,11 +226,16 @@ class RecordingProcess:
     def capture(self, snapshot: Snapshot) -> None:
         """Send ``snapshot`` to the child without blocking (dropped, counted, when the pipe
         is full)."""
+        self.capture_frame(pack_snapshot(snapshot, self.frame))
+
+    def capture_frame(self, payload: bytes) -> None:
+        """Send a snapshot's frame (:meth:`SnapshotFrame.payload`) without blocking
+        (dropped, counted, when the pipe is full)."""
         self.taken += 1
         if self._pending and not self._flush():
             self.dropped += 1
             return
-        if not self._send(pack_snapshot(snapshot, self._floats)):
+        if not self._send(payload):
             self.dropped += 1
 
     def line(self, text: str, t_s: float, *, level: str = "info", name: str = "go2-wbc"
