@@ -7,7 +7,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import mujoco
@@ -33,13 +33,19 @@ class TimedTicks:
     steps the loop really took, with the caches as the tick left them.
     """
 
-    def __init__(self, loop: ControlLoop):
+    def __init__(self, loop: ControlLoop, *, clock: Callable[[], float] = time.perf_counter):
+        """Args:
+            loop: The loop whose ticks to time.
+            clock: What marks the stages [s]: the wall clock, or ``time.thread_time`` for
+                the CPU time the tick's thread used (what a loaded machine's other
+                processes do not add to).
+        """
         self.loop = loop
         self.samples: dict[str, list[float]] = {p: [] for p in (*PARTS, "tick")}
         self.stages: dict[str, list[float]] = {}
         self.mj_step: list[float] = []
         self._stepped = 0.0  # seconds in mj_step since the last tick began
-        self._marks = StageTimes(time.perf_counter)
+        self._marks = StageTimes(clock)
 
     @contextlib.contextmanager
     def timing_mj_step(self) -> Iterator[None]:

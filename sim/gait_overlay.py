@@ -22,12 +22,15 @@ if TYPE_CHECKING:
 # MuJoCo is imported where it is used: the command line parses --overlay before it chooses
 # MuJoCo's rendering backend (MUJOCO_GL), which must precede the import.
 
-#: Colours (RGBA): hues the other overlays and the scene do not use.
+#: Colours (RGBA): hues the other overlays and the scene do not use, dark enough that the
+#: scene's lights do not saturate a channel and shift the hue (a violet of (0.55, 0.25, 1.0)
+#: rendered as magenta).
 STANCE_RGBA = (0.00, 0.85, 0.85, 1.0)
-SWING_RGBA = (0.55, 0.25, 1.00, 1.0)
-FOOTHOLD_RGBA = (0.55, 0.25, 1.00, 0.6)
-COMMANDED_RGBA = (1.00, 0.40, 0.60, 1.0)
-MEASURED_VELOCITY_RGBA = (0.60, 1.00, 0.00, 1.0)
+SWING_RGBA = (0.35, 0.10, 0.70, 1.0)
+#: Opaque: a translucent disc takes the floor's hue under the lights.
+FOOTHOLD_RGBA = SWING_RGBA
+COMMANDED_RGBA = (0.75, 0.15, 0.35, 1.0)
+MEASURED_VELOCITY_RGBA = (0.40, 0.70, 0.00, 1.0)
 #: The velocity arrows show where the base would be this long [s] ahead at that velocity:
 #: 1 m/s is a 1 m arrow, 1 rad/s an arc of 1 rad.
 VELOCITY_HORIZON_S = 1.0
@@ -59,7 +62,7 @@ class GaitOverlay:
 
     - each stance foot: a cyan disc on the floor under it;
     - each swing foot: a violet ball around it, a thin violet line from it to its planned
-      foothold and a translucent violet disc on the floor there;
+      foothold and a violet disc on the floor there;
     - the commanded velocity (pink) and the measured one (lime, thinner, a little higher):
       an arrow from above the base to where the base would be :attr:`horizon_s` ahead, and
       an arc around the base's vertical through the heading it would turn by in that time,

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sim.gait_view import VELOCITY_NAMES, VELOCITY_UNITS, heading_velocities
+from sim.plot_axes import control_tick_axis, shade_phases
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -56,7 +57,6 @@ def walking_figure(arrays: dict[str, np.ndarray], *, title: str, caption: str = 
     from matplotlib.patches import Patch
 
     from sim.episode_metrics import LOADED_FORCE_N
-    from sim.run_plot import control_tick_axis, shade_phases
 
     t = arrays["t_s"]
     truth = heading_velocities(arrays["q_true"], arrays["v_true"])

@@ -362,7 +362,7 @@ def test_trajectory_from_a_file_succeeds(tmp_path):
       "(e.g. 640x480), received '640x'")),
     (["high-five", "--video", "v.mp4", "--overlay", "com,bogus"],
      ("--overlay: expected a comma-separated list of com, polygon, forces, measured, target, "
-      "or all or none; received 'com,bogus'")),
+      "gait, or all or none; received 'com,bogus'")),
     (["high-five", "--overlay", "com"], "--overlay: only used with --video or --viewer"),
     (["high-five", "--viewer-exit"], "--viewer-exit: only used with --viewer"),
     (["high-five", "--report", "/no/such/dir/r.json"],

@@ -185,7 +185,7 @@ def test_every_leg_foothold_and_velocity_is_drawn_where_it_belongs():
     lines = [g for g in drawn(s, SWING_RGBA) if g.type == mujoco.mjtGeom.mjGEOM_LINE]
     np.testing.assert_allclose([g.pos for g in balls], FEET[[1, 2]])
     assert len(lines) == 2
-    holds = drawn(s, FOOTHOLD_RGBA)
+    holds = [g for g in drawn(s, FOOTHOLD_RGBA) if g.type == mujoco.mjtGeom.mjGEOM_CYLINDER]
     np.testing.assert_allclose([g.pos[:2] for g in holds], [[0.30, -0.15], [-0.08, 0.15]])
     # The commanded velocity, heading 90 deg: 0.5 m/s forward is a 0.5 m arrow along +y,
     # from 15 cm above the base; its yaw rate an arc of 0.8 rad ending in an arrowhead.

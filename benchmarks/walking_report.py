@@ -1,0 +1,82 @@
+"""The walking benchmark's report as text: speed tracking, pushes, the tick's cost."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+#: The commanded components' names, their units.
+_AXES = (("forward", "m/s"), ("lateral", "m/s"), ("yaw rate", "rad/s"))
+
+
+def _number(value: float, spec: str) -> str:
+    return "-" if value is None or not math.isfinite(value) else format(value, spec)
+
+
+def tracking_error(row: dict[str, Any]) -> str:
+    """Each commanded component's error relative to the command, in percent
+    (``forward -3.2 %``); a walk on the spot: its largest speed [m/s]."""
+    parts = []
+    for k, (name, _) in enumerate(_AXES):
+        if row["command"][k]:
+            parts.append(f"{name} {_number(100.0 * row['relative_error'][k], '+.1f')} %")
+    return ", ".join(parts) or "in place"
+
+
+def format_report(report: dict[str, Any]) -> str:
+    """The three tables as text, with the machine and its load."""
+    m = report["machine"]
+    versions = ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
+    lines = [(f"Machine: {m['cpu']}, {m['cores']} cores, load "
+              f"{m['load_average_1_5_15_min'][0]:.2f} at start, Python {m['python']}; "
+              f"{versions}"),
+             (f"Mode: {report['mode']}. Walk goals of {report['walk_s']:g} s on the menagerie "
+              "plant, go2 sensors; measured on the simulator's truth, the mean over the "
+              f"walking phase from {report['settle_into_walk_s']:g} s after it began"), "",
+             "Speed tracking (velocities in the heading frame)"]
+    head = (f"{'command':<17}{'state':<9}{'status':<10}{'fell':<5}{'forward':>8}"
+            f"{'lateral':>8}{'yaw':>7}  {'error against the command':<28}{'yaw drift':>9}"
+            f"{'height':>7}{'range':>6}")
+    units = (f"{'':<41}{'[m/s]':>8}{'[m/s]':>8}{'[rad/s]':>7}  {'':<28}{'[deg]':>9}"
+             f"{'[m]':>7}{'[mm]':>6}")
+    lines += [head, units, "-" * len(head)]
+    for row in report["tracking"]:
+        measured = row["measured"]
+        lines.append(
+            f"{row['name']:<17}{row['state']:<9}{row['status']:<10}"
+            f"{'yes' if row['fell'] else 'no':<5}{_number(measured[0], '.3f'):>8}"
+            f"{_number(measured[1], '.3f'):>8}{_number(measured[2], '.3f'):>7}  "
+            f"{tracking_error(row):<28}{_number(row['yaw_drift_deg'], '+.1f'):>9}"
+            f"{_number(row['height_mean_m'], '.3f'):>7}"
+            f"{_number(row['height_range_mm'], '.0f'):>6}")
+    pushes = report["pushes"]
+    force_n = pushes["impulse_ns"] / pushes["duration_s"]
+    lines += ["", (f"Pushes of {pushes['impulse_ns']:g} N s ({force_n:g} N for "
+                   f"{pushes['duration_s']:g} s) on the base while trotting at "
+                   f"{pushes['speed_mps']:g} m/s on the estimate, directions from the heading "
+                   f"(0 forward, 90 left), at seeded instants (seed {pushes['seed']})"),
+              (f"{'direction [deg]':<16}{'at [s]':>7}  {'status':<10}{'fell':<5}"
+               f"{'min height [m]':>15}{'max tilt [deg]':>15}")]
+    for row in pushes["runs"]:
+        lines.append(f"{row['direction_deg']:<16}{row['at_s']:>7.2f}  {row['status']:<10}"
+                     f"{'yes' if row['fell'] else 'no':<5}{row['min_height_m']:>15.3f}"
+                     f"{row['max_tilt_deg']:>15.1f}")
+    lines.append(f"fell in {pushes['fell']} of {len(pushes['runs'])}")
+    timing = report["timing"]
+    lines += ["", (f"The tick while walking ({timing['control_rate_hz']:g} Hz, "
+                   f"forward 0.5 m/s for {timing['walk_s']:g} s; ticks of the walking phase, "
+                   "[us]: on the wall clock, and on the thread's CPU time)"),
+              (f"{'state':<10}{'part':<12}{'median':>8}{'p99':>8}{'mean':>8}   "
+               f"{'cpu median':>10}{'cpu p99':>8}")]
+    for row in timing["runs"]:
+        for part, s in row["walking_ticks_us"].items():
+            c = row["walking_ticks_cpu_us"][part]
+            lines.append(f"{row['state']:<10}{part:<12}{_number(s['median'], '.1f'):>8}"
+                         f"{_number(s['p99'], '.1f'):>8}{_number(s['mean'], '.1f'):>8}   "
+                         f"{_number(c['median'], '.1f'):>10}{_number(c['p99'], '.1f'):>8}")
+    lines.append("")
+    lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument): " + (
+        ", ".join(f"{row['state']} {row['real_time_factor']:.2f} (sim time over CPU time "
+                  f"{row['sim_over_cpu']:.2f}, cpu share {row['cpu_share']:.2f}, "
+                  f"{row['status']})" for row in timing["runs"])))
+    return "\n".join(lines)
