@@ -140,6 +140,7 @@ class DdsRobot:
         #: The stream's kind, checks, rate and counters (see the module doc).
         self.stream = LowStateStream()
         self._answer_tick = 0
+        self._remote = bytes(40)  # the newest state's wireless_remote
         self._frame = LowCmdFrame()
         self._cmd_record = self._frame.record
         self._cmd_message = LowCmdMessage(self._cmd_record)
@@ -160,6 +161,12 @@ class DdsRobot:
         """The ``tick`` of the newest state returned: what the next command's ``reserve``
         carries (0 before the first)."""
         return self._answer_tick
+
+    @property
+    def wireless_remote(self) -> bytes:
+        """The 40 bytes of ``wireless_remote`` in the newest state returned (zeros before the
+        first): the GO2's remote (:mod:`wbc.robot_io.wireless_remote` decodes them)."""
+        return self._remote
 
     @property
     def last_command(self) -> SdkMotorCommand | None:
@@ -199,6 +206,7 @@ class DdsRobot:
                        out: SensorRecord | None = None) -> SensorRecord:
         """``record`` stamped now, its tick the robot's or the new samples' count (doc)."""
         self._answer_tick = int(record["tick"])
+        self._remote = record["wireless_remote"].tobytes()
         sensor = sensor_record_from_low_state(record, stamp_s=self.time_s, out=out)
         kind = self.stream.kind
         if kind is not None and not kind.ticks:

@@ -95,6 +95,10 @@ def add_run_command(sub: Any) -> None:
                                                  fmt="g"),
                      metavar="S", help="come to rest and exit after this many seconds "
                                        "(default: run until Ctrl-C)")
+    dds.add_argument("--remote", action="store_true",
+                     help="walk on the GO2's own remote (LowState_.wireless_remote): left "
+                          "stick forward and sideways, right stick turning (default: "
+                          "ignored; rt/cmd_vel is read either way)")
     dds.add_argument("--no-stand", action="store_true",
                      help="do not stand a robot that is down at the start (default: stand it)")
     dds.add_argument("--no-align", action="store_true",
@@ -142,6 +146,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
     from actions.robot.realtime_loop import RealtimeLoop, stop_on_signals
     from actions.robot.rest_sequence import RestSettings
     from actions.robot.tick_log import TickLog
+    from actions.robot.velocity_inputs import VelocityInputs
     from sim.episode_loop import startup_objects_frozen
     from wbc.controller.controller_config import ControllerConfig
     from wbc.controller.whole_body_controller import WholeBodyController
@@ -163,7 +168,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             dict(args.controller_param))
     except ConfigurationError as err:
         args.parser.error(f"--set controller.{err}")
-    robot = bridge = ros_node = None
+    robot = bridge = ros_node = inputs = None
     try:
         try:
             make_estimator(args.estimator, control_period_s=period_s, **params)
@@ -200,6 +205,10 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
                           stale_after_s=stale_after_s,
                           align_s=0.0 if args.no_align else None,
                           rest=RestSettings(stand_on_start=not args.no_stand))
+        inputs = VelocityInputs(loop, domain_id=args.domain, interface=args.interface,
+                                remote=(lambda: robot.wireless_remote) if args.remote else None,
+                                say=say)
+        rt.callbacks.append(inputs)
         log = TickLog() if args.log is not None else None
         if log is not None:
             rt.callbacks.append(log.record)
@@ -218,7 +227,8 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             calibration = CalibrateWhenStanding(args.calibrate, say)
             rt.callbacks.append(calibration)
         say(f"controlling at {args.control_rate} Hz; actions served: "
-            f"{', '.join(bridge.action_names)}"
+            f"{', '.join(bridge.action_names)}; velocity commands from rt/cmd_vel"
+            + (" and the remote" if args.remote else "")
             + (" (DRY RUN: no command is published)" if args.dry_run else "")
             + "; Ctrl-C to bring the robot to rest and exit")
         rt.start()
@@ -232,6 +242,7 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             say(scheduling.describe())
             rt.run(duration_s=args.duration)
         report = rt.report()
+        report["velocity_inputs"] = inputs.report()
         if calibration is not None:
             report["calibration"] = (
                 calibration.report.as_dict() if calibration.report is not None
@@ -256,6 +267,8 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             recording.close()
         if ros_node is not None:
             ros_node.close()
+        if inputs is not None:
+            inputs.close()
         if bridge is not None:
             bridge.close()
         if robot is not None:
