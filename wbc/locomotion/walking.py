@@ -13,6 +13,7 @@ from wbc.controller.balance_controller import BalanceController
 from wbc.controller.foot_reach import LEG_REACH_M
 from wbc.controller.whole_body_controller import WholeBodyController
 from wbc.core.errors import ConfigurationError
+from wbc.core.min_jerk import min_jerk
 from wbc.locomotion.foothold_planner import FootholdPlanner, yaw_rotation
 from wbc.locomotion.gait import GaitClock, GaitParameters, VelocityLimits
 from wbc.locomotion.swing_trajectory import swing_reference
@@ -37,8 +38,11 @@ class _Leg(enum.Enum):
     LATE = 3       # past its touch-down time, still lowering
 
 
-#: Foot height [m] above its ground at which a descending foot counts as landed.
-TOUCH_M = 0.006
+#: A descending foot has landed when it is within TOUCH_M [m] of the ground it left from,
+#: or within NEAR_M and stopped (slower than STOPPED_MPS [m/s]: the ground holds it). A foot
+#: counted as landed while still moving down would make the estimator, which takes a stance
+#: foot as fixed, carry the base down with it (5 mm/s of height drift in a trot at 6 mm).
+TOUCH_M, NEAR_M, STOPPED_MPS = 0.002, 0.012, 0.05
 #: How fast a late foot keeps going down [m/s], and for how long at most [s].
 LATE_SPEED_MPS, LATE_MAX_S = 0.3, 0.15
 #: Accelerations [m/s^2, rad/s^2] at which the commanded velocity follows a new command.
@@ -58,6 +62,8 @@ SWING_KD, VELOCITY_LEAD_RAD_S = 4.0, 4.0
 #: task holds the whole body's CoM, and the legs' swings and the stance legs' compliance
 #: leave the base about 1 cm off its height without it.
 HEIGHT_KI, HEIGHT_TRIM_M = 2.0, 0.03
+#: Time [s] the CoM takes, once the feet are down after a stop, back over them.
+SETTLE_S = 0.3
 #: Stop stepping once slower than this [m/s] (or after STOP_STEPPING_S), then settle.
 STOP_SPEED_MPS, STOP_STEPPING_S = 0.12, 0.6
 
@@ -104,6 +110,7 @@ class Walking:
         self._starts: dict[str, np.ndarray] = {}       # each swing's lift-off point [m]
         self._late_target: dict[str, np.ndarray] = {}  # a late foot's target [m]
         self._late_s: dict[str, float] = {}            # how long it has been late [s]
+        self._foot_z: dict[str, float] = {}            # each foot's height last tick [m]
 
     # ------------------------------------------------------------------ commands
 
@@ -144,7 +151,11 @@ class Walking:
         self.planner = FootholdPlanner(offsets, com_height_m=height,
                                        max_step_m=min(0.2, 0.8 * reach))
         self._com_ref = com.copy()
-        self._com_height = float(com[2])
+        # Where the CoM stands over the feet (from their centroid, heading frame at _yaw0).
+        self._home, self._yaw0 = com[:2] - feet[:, :2].mean(axis=0), yaw
+        self._settle_s: float | None = None
+        self._planted = False  # a stop has ended the stepping
+        self._com_height = float(com[2]) - ground  # above the ground
         #: The base height [m] above the ground that walking holds: the height at the start.
         self.base_height_m = float(ctrl.kinematics.base_position[2]) - ground
         self._trim = 0.0
@@ -196,11 +207,11 @@ class Walking:
         """Set the controller's references and contacts for time ``now_s`` [s]."""
         if self.phase is None:
             raise ConfigurationError("Walking.advance: call start(now_s) first")
-        if self.phase is WalkPhase.DONE:
-            return self.phase
         dt = max(now_s - self._last_s, 0.0)
         self._last_s = now_s
         self._measure(dt)
+        if self.phase is WalkPhase.DONE:
+            return self.phase
         self._follow_command(dt)
         if not any(state is _Leg.LATE for state in self._legs.values()):
             self.gait_time_s += dt
@@ -209,7 +220,7 @@ class Walking:
         for leg in LEGS:
             self._advance_leg(leg, dt, stepping)
         if self.phase is WalkPhase.STOPPING and self._settled():
-            self._finish()
+            self._settle(now_s)
         return self.phase
 
     def _yaw(self) -> float:
@@ -244,10 +255,12 @@ class Walking:
         distance = math.hypot(lead[0], lead[1])
         if distance > COM_LEAD_M:
             self._com_ref[:2] -= lead * (1.0 - COM_LEAD_M / distance)
-        height = ctrl.kinematics.base_position[2] - self._ground_now()
+        ground = self._ground_now()
+        height = ctrl.kinematics.base_position[2] - ground
         self._trim = min(max(self._trim + HEIGHT_KI * (self.base_height_m - height) * dt,
                              -HEIGHT_TRIM_M), HEIGHT_TRIM_M)
-        self._com_ref[2] = self._com_height + self._trim
+        # Above the stance feet: the estimate's height drifts, the legs' length does not.
+        self._com_ref[2] = ground + self._com_height + self._trim
         ctrl.set_com_target(self._com_ref, velocity)
         yaw_rate = self.commanded_velocity[2]
         self._yaw_ref += yaw_rate * dt
@@ -264,12 +277,17 @@ class Walking:
         return float(np.mean(feet[rows, 2])) if rows else float(np.mean(feet[:4, 2]))
 
     def _stepping(self, now_s: float) -> bool:
-        """Whether new steps start: always, except when a stop has slowed the robot."""
+        """Whether new steps start: always, until a stop has slowed the robot (or has
+        stepped for STOP_STEPPING_S); from then on, never."""
+        if self._planted:
+            return False
         if self.phase is not WalkPhase.STOPPING or self._stop_s is None:
             return True
-        slow = (math.hypot(*self.measured_velocity[:2]) < STOP_SPEED_MPS
+        slow = (not self.commanded_velocity.any()
+                and math.hypot(*self.measured_velocity[:2]) < STOP_SPEED_MPS
                 and abs(self.measured_velocity[2]) < 0.3)
-        return not (slow or now_s - self._stop_s > STOP_STEPPING_S)
+        self._planted = slow or now_s - self._stop_s > STOP_STEPPING_S
+        return not self._planted
 
     def _advance_leg(self, leg: str, dt: float, stepping: bool) -> None:
         ctrl, gait = self.controller, self.gait
@@ -337,9 +355,12 @@ class Walking:
             self._legs[leg] = _Leg.LATE
 
     def _landed(self, leg: str) -> bool:
-        """The foot is down: within :data:`TOUCH_M` of the ground it left from."""
-        z = self.controller.kinematics.frame_position[LEGS.index(leg), 2]
-        return bool(z <= self._ground[leg] + TOUCH_M)
+        """The foot is down: on the ground it left from, or near it and stopped."""
+        z = float(self.controller.kinematics.frame_position[LEGS.index(leg), 2])
+        previous, self._foot_z[leg] = self._foot_z.get(leg, z), z
+        above = z - self._ground[leg]
+        stopped = abs(z - previous) < STOPPED_MPS * self.controller.control_period_s
+        return above <= TOUCH_M or (above <= NEAR_M and stopped)
 
     def _touch_down(self, leg: str) -> None:
         schedule = self.controller.schedule
@@ -352,15 +373,29 @@ class Walking:
         schedule = self.controller.schedule
         return (all(state is _Leg.STANCE for state in self._legs.values())
                 and not any(schedule.is_ramping(leg) for leg in LEGS)
-                and not self._stepping(self._last_s))
+                and self._planted)
+
+    def _settle(self, now_s: float) -> None:
+        """On four loaded feet: the CoM to where it stood over them at the start, then DONE."""
+        if self._settle_s is None:
+            feet = self.controller.foot_positions()[:, :2]
+            self._settle_to = (feet.mean(axis=0)
+                               + yaw_rotation(self._yaw() - self._yaw0) @ self._home)
+            # From the capture point: where the CoM would come to rest by itself.
+            ctrl = self.controller
+            self._settle_from = (ctrl.kinematics.com_position[:2] + self.planner.feedback_gain
+                                 * ctrl.kinematics.com_velocity[:2])
+            self._settle_s = now_s
+        s = min_jerk((now_s - self._settle_s) / SETTLE_S)[0]
+        self._com_ref[:2] = self._settle_from + s * (self._settle_to - self._settle_from)
+        if now_s - self._settle_s >= SETTLE_S:
+            self._finish()
 
     def _finish(self) -> None:
         ctrl = self.controller
         ctrl.schedule.min_stance = self._min_stance
         ctrl.com_task.set_weight(self._com_weight)
         ctrl.motor.retune(self._shaping)
-        com = ctrl.com_position()
-        self._com_ref[:2] = com[:2]
         ctrl.set_com_target(self._com_ref)
         ctrl.base_task.reference[1, :] = 0.0
         self.commanded_velocity[:] = 0.0
