@@ -46,9 +46,12 @@ bench: $(STAMP)
 bench-full: $(STAMP)
 	$(BIN)/python -m benchmarks.qp_timing
 
-# The README's and docs/ pictures and the numbers they quote (docs/pictures.json).
+# Every picture the README and docs/ show, and the numbers they quote (docs/pictures.json):
+# the high five's picture, GIF and plot (about a minute), then the QP benchmark and the
+# plant-pushes sweep run again for theirs (several minutes more on 2 cores). The first three
+# alone: `.venv/bin/python scripts/docs_media.py`.
 docs: $(STAMP)
-	$(BIN)/python scripts/docs_media.py
+	$(BIN)/python scripts/docs_media.py --all
 
 lint: $(STAMP)
 	$(BIN)/python -m ruff check .

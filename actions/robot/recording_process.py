@@ -1,10 +1,10 @@
 """A wall-clock run's recording built and written in a child process:
 :class:`RecordingProcess`, what ``go2-wbc run --dds --mcap/--foxglove`` records through.
 
-The loop's thread only packs a :class:`~actions.robot.run_recording.Snapshot` into one
-fixed-size frame (a preallocated float buffer and its few names) and writes it, without
-blocking, into a pipe whose kernel buffer is the bounded queue (about 800 snapshots, 16 s at
-50 Hz): a full pipe drops the snapshot, counted. The child process unpacks the frames and
+The loop's thread only copies its snapshot into one fixed-size frame (:class:`SnapshotFrame`:
+a preallocated float buffer and its few names) and writes it, without blocking, into a pipe
+whose kernel buffer is the bounded queue (826 snapshots, 16 s at 50 Hz): a full pipe drops
+the snapshot, counted. The child process unpacks the frames and
 does everything else (the messages, the MCAP chunks' zstd, the file's writes, the WebSocket
 server) with its own interpreter, so none of it runs in the loop's thread or holds its GIL.
 A writer *thread* was measured first: its Python work (about 0.3 ms a snapshot) delays the
@@ -23,6 +23,7 @@ import signal
 import struct
 from collections import deque
 from collections.abc import Sequence
+from multiprocessing.process import BaseProcess
 from pathlib import Path
 from typing import Any
 
@@ -199,9 +200,10 @@ class RecordingProcess:
         options = {"mcap_path": None if mcap_path is None else str(mcap_path), "port": port,
                    "metadata": dict(metadata or {}), "control_period_s": control_period_s,
                    "rate_hz": self.rate_hz}
-        self._process = context.Process(target=_serve, args=(reader, child_control, options),
-                                        name="go2-wbc recording", daemon=True)
-        self._process.start()
+        process = context.Process(target=_serve, args=(reader, child_control, options),
+                                  name="go2-wbc recording", daemon=True)
+        self._process: BaseProcess | None = process
+        process.start()
         reader.close()
         child_control.close()
         reply = self._reply(START_TIMEOUT_S, "start")
