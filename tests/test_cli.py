@@ -341,11 +341,18 @@ def test_trajectory_from_a_file_succeeds(tmp_path):
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["jump"], ("COMMAND: invalid choice: 'jump' (choose from 'high-five', 'stand', 'sit', "
-                "'trajectory', 'stand-pd', 'send-goal', 'actions', 'interface', 'bridge', "
+                "'trajectory', 'walk', 'stand-pd', 'send-goal', 'actions', 'interface', 'bridge', "
                 "'run', 'check', 'replay', 'ros2')")),
     ([], "the following arguments are required: COMMAND"),
     (["high-five", "--height", "0.9"],
      "--height: expected a height in [0.10, 0.50] m, received 0.9"),
+    (["walk", "--forward", "1.5"],
+     "--forward: expected a forward velocity in [-1, 1] m/s, received 1.5"),
+    (["walk", "--yaw-rate", "fast"],
+     ("--yaw-rate: expected a turning rate (counter-clockwise) in [-1.2, 1.2] rad/s, "
+      "received 'fast'")),
+    (["walk", "--duration", "3", "--distance", "2"],
+     "--distance: not allowed with argument --duration"),
     (["high-five", "--height", "high"],
      "--height: expected a height in [0.10, 0.50] m, received 'high'"),
     (["high-five", "--hold", "1.5"],

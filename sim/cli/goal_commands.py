@@ -1,4 +1,5 @@
-"""``go2-wbc high-five``, ``stand``, ``sit``, ``trajectory``, ``stand-pd``: each builds its goal."""
+"""``go2-wbc high-five``, ``stand``, ``sit``, ``trajectory``, ``walk``, ``stand-pd``: each builds
+its goal."""
 
 from __future__ import annotations
 
@@ -11,8 +12,9 @@ from actions.go2.go2_actions import (
     HIGH_FIVE_ACTION,
     SIT_ACTION,
     STAND_ACTION,
+    WALK_ACTION,
 )
-from actions.go2.go2_interfaces import HighFiveGoal, SitGoal, StandGoal
+from actions.go2.go2_interfaces import HighFiveGoal, SitGoal, StandGoal, WalkGoal
 from actions.ros_interfaces.control_msgs import FollowJointTrajectoryGoal
 from sim.cli.exit_codes import EXIT_SUCCEEDED
 from sim.cli.goal_run import GoalRun
@@ -47,6 +49,23 @@ def trajectory(args: argparse.Namespace) -> int:
     what = (f"{len(goal.trajectory.joint_names)} joint(s), {len(points)} point(s), "
             f"{end_s:g} s")
     return GoalRun(args, FOLLOW_JOINT_TRAJECTORY_ACTION, goal, what).run()
+
+
+#: How long [s] ``go2-wbc walk`` walks when given neither a duration nor a distance.
+WALK_DEFAULT_S = 5.0
+
+
+def walk(args: argparse.Namespace) -> int:
+    """``go2-wbc walk``: a Walk goal, for ``--duration`` or ``--distance``."""
+    distance = args.distance or 0.0
+    duration = args.duration if args.duration is not None else (
+        0.0 if distance else WALK_DEFAULT_S)
+    goal = WalkGoal(forward_mps=args.forward, lateral_mps=args.lateral,
+                    yaw_rate_radps=args.yaw_rate, duration_s=duration, distance_m=distance)
+    span = f"for {distance:g} m" if distance else f"for {duration:g} s"
+    return GoalRun(args, WALK_ACTION, goal,
+                   f"forward {goal.forward_mps:g} m/s, lateral {goal.lateral_mps:g} m/s, "
+                   f"yaw rate {goal.yaw_rate_radps:g} rad/s, {span}").run()
 
 
 def stand_pd(args: argparse.Namespace) -> int:

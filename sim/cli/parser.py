@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import argparse
 
-from actions.go2.go2_actions import HIGH_FIVE_ACTION, SIT_ACTION, STAND_ACTION
+from actions.go2.go2_actions import HIGH_FIVE_ACTION, SIT_ACTION, STAND_ACTION, WALK_ACTION
 from actions.go2.go2_interfaces import SitGoal, StandGoal
 from actions.go2.high_five_behaviour import MAX_HOLD_S
 from actions.go2.pose_behaviour import MAX_DURATION_S, MIN_DURATION_S
+from actions.go2.walk_behaviour import MAX_DISTANCE_M, MAX_WALK_S
 from sim.cli import dds_goal, goal_commands
 from sim.cli.arg_types import float_in, trajectory_file, whole_in
 from sim.cli.bridge import add_bridge_command
@@ -24,6 +25,7 @@ from sim.cli.settings import add_settings
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
 from sim.cli.version import version_text
 from sim.episode import episode_default
+from wbc.locomotion.gait import VelocityLimits
 from wbc.motions.leg_lift import MAX_HEIGHT_M, MIN_HEIGHT_M
 
 EXAMPLES_HELP = """\
@@ -36,6 +38,7 @@ examples:
   go2-wbc high-five --cancel-at 2.5         # ends CANCELED with the foot down
   go2-wbc stand; go2-wbc sit --duration 1.5
   go2-wbc trajectory wave.yaml              # format: go2-wbc trajectory --help
+  go2-wbc walk --forward 0.5 --duration 5 --video walk.mp4 --plot walk.png
   go2-wbc high-five --plant identified --set plant.calf_friction_loss=1.4
   go2-wbc high-five --set run.control_rate_hz=500   # the GO2's usual low-level rate
   go2-wbc high-five --set estimator.trust_timeout_s=0.05 --set controller.gains.com_kp=200
@@ -102,6 +105,29 @@ def build_parser() -> argparse.ArgumentParser:
     trajectory.add_argument("file", type=trajectory_file, metavar="FILE",
                             help="the trajectory file (format below)")
     trajectory.set_defaults(run=goal_commands.trajectory)
+
+    walk = add(WALK_ACTION, "trot at a velocity (the base's heading frame) for a duration or a "
+                            "distance, then stop on four loaded feet")
+    limits = VelocityLimits()
+    for flag, limit, what, unit in (
+            ("--forward", limits.forward_mps, "forward velocity", "m/s"),
+            ("--lateral", limits.lateral_mps, "leftward velocity", "m/s"),
+            ("--yaw-rate", limits.yaw_rate_radps, "turning rate (counter-clockwise)", "rad/s")):
+        walk.add_argument(flag, type=float_in(-limit, limit, what=f"a {what}", unit=unit,
+                                              fmt="g"),
+                          default=0.0, metavar=unit.split("/")[0].upper(),
+                          help=f"{what} [{unit}], in [{-limit:g}, {limit:g}] (default: 0)")
+    span = walk.add_mutually_exclusive_group()
+    span.add_argument("--duration", type=float_in(0.0, MAX_WALK_S, what="a duration", unit="s",
+                                                  fmt="g"),
+                      metavar="S", help=f"walk this long [s], in (0, {MAX_WALK_S:g}] "
+                                        f"(default: {goal_commands.WALK_DEFAULT_S:g} unless "
+                                        "--distance is given)")
+    span.add_argument("--distance", type=float_in(0.0, MAX_DISTANCE_M, what="a path length",
+                                                  unit="m", fmt="g"),
+                      metavar="M", help=f"walk this path length [m], in (0, "
+                                        f"{MAX_DISTANCE_M:g}] (default: none)")
+    walk.set_defaults(run=goal_commands.walk)
 
     stand_pd = sub.add_parser("stand-pd", help="stand under a joint PD (baseline, no QP)",
                               description="Stand under a joint PD with gravity compensation "
