@@ -342,7 +342,7 @@ def test_trajectory_from_a_file_succeeds(tmp_path):
 @pytest.mark.parametrize(("argv", "message"), [
     (["jump"], ("COMMAND: invalid choice: 'jump' (choose from 'high-five', 'stand', 'sit', "
                 "'trajectory', 'walk', 'stand-pd', 'send-goal', 'actions', 'interface', 'bridge', "
-                "'run', 'check', 'replay', 'ros2')")),
+                "'run', 'check', 'replay', 'ros2', 'teleop')")),
     ([], "the following arguments are required: COMMAND"),
     (["high-five", "--height", "0.9"],
      "--height: expected a height in [0.10, 0.50] m, received 0.9"),

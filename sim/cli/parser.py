@@ -22,6 +22,7 @@ from sim.cli.ros2_command import add_ros2_commands
 from sim.cli.run_dds import add_run_command
 from sim.cli.send_goal import add_action_commands
 from sim.cli.settings import add_settings
+from sim.cli.teleop import add_teleop_command
 from sim.cli.trajectory_file import TRAJECTORY_FORMAT_HELP
 from sim.cli.version import version_text
 from sim.episode import episode_default
@@ -147,4 +148,5 @@ def build_parser() -> argparse.ArgumentParser:
     add_check_command(sub)
     add_replay_command(sub)
     add_ros2_commands(sub)  # after run and send-goal: it adds --ros2 to them
+    add_teleop_command(sub)
     return parser
