@@ -22,7 +22,9 @@ sensors, and measured tick by tick on the simulator's truth (:class:`WalkTrace`)
    thread's CPU time (``time.thread_time``: what other processes on a loaded machine do not
    add), then the same episode untimed for the loop's real-time factor (sim time over wall
    time, goal to result) and its sim time over the process's CPU time (the real-time factor
-   it would have with a core to itself).
+   it would have with a core to itself). The yardstick, in the same run: the robot standing
+   as long, no goal (its ticks' CPU times, its real-time factors): a loaded machine slows
+   both alike, so the ratio of walking to standing is what another machine would see.
 
 A run fell when its base came down to ``benchmarks.robustness.FALLEN_HEIGHT_M`` or ended
 below standing height or tilted beyond the balance watch's limit. Every run is seeded and in
@@ -211,6 +213,23 @@ def run_walk(run: WalkRun, *, clock: Callable[[], float] | None = None,
     return out
 
 
+def run_standing(state: str, seconds: float, *,
+                 clock: Callable[[], float] | None = None) -> dict[str, Any]:
+    """The yardstick of the timing rows: the robot standing ``seconds`` at 1 kHz (no goal),
+    its ticks timed on ``clock`` (every tick), or untimed for the real-time factor."""
+    runner = EpisodeRunner(Episode(action=None, state=state, settle_s=SETTLE_S,
+                                   control_period_s=TIMING_PERIOD_S, after_s=seconds))
+    ticks = TimedTicks(runner.loop, clock=clock) if clock is not None else None
+    result = runner.run(tick=ticks)
+    out: dict[str, Any] = {
+        "sim_s": result.sim_s, "real_time_factor": result.sim_s / max(result.wall_s, 1e-9),
+        "sim_over_cpu": result.sim_s / max(result.cpu_s, 1e-9)}
+    if ticks is not None:
+        out["ticks_us"] = {part: stats_us(ticks.samples[part])
+                           for part in ("controller", "actions", "estimator", "physics", "tick")}
+    return out
+
+
 def push_instants(count: int, walk_s: float, seed: int = PUSH_SEED) -> list[float]:
     """``count`` seeded instants [s into the walk] in :data:`PUSH_WINDOW_S`, each leaving
     :data:`PUSH_RECOVERY_S` of walking after it."""
@@ -249,7 +268,13 @@ def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> 
         wall = run_walk(timed, clock=time.perf_counter)
         cpu = run_walk(timed, clock=time.thread_time)
         plain = run_walk(timed, traced=False)
+        log(f"the yardstick: standing at 1 kHz on the {state}")
+        standing = run_standing(state, timing_s, clock=time.thread_time)
+        standing_plain = run_standing(state, timing_s)
         timing.append({"state": state, "status": plain["status"], "fell": plain["fell"],
+                       "standing_ticks_cpu_us": standing["ticks_us"],
+                       "standing_real_time_factor": standing_plain["real_time_factor"],
+                       "standing_sim_over_cpu": standing_plain["sim_over_cpu"],
                        "real_time_factor": plain["real_time_factor"],
                        "sim_over_cpu": plain["sim_over_cpu"],
                        "cpu_share": plain["cpu_share"], "sim_s": plain["sim_s"],

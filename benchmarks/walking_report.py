@@ -66,17 +66,25 @@ def format_report(report: dict[str, Any]) -> str:
     lines += ["", (f"The tick while walking ({timing['control_rate_hz']:g} Hz, "
                    f"forward 0.5 m/s for {timing['walk_s']:g} s; ticks of the walking phase, "
                    "[us]: on the wall clock, and on the thread's CPU time)"),
-              (f"{'state':<10}{'part':<12}{'median':>8}{'p99':>8}{'mean':>8}   "
+              (f"{'state':<10}{'part':<24}{'median':>8}{'p99':>8}{'mean':>8}   "
                f"{'cpu median':>10}{'cpu p99':>8}")]
     for row in timing["runs"]:
         for part, s in row["walking_ticks_us"].items():
             c = row["walking_ticks_cpu_us"][part]
-            lines.append(f"{row['state']:<10}{part:<12}{_number(s['median'], '.1f'):>8}"
+            lines.append(f"{row['state']:<10}{part:<24}{_number(s['median'], '.1f'):>8}"
                          f"{_number(s['p99'], '.1f'):>8}{_number(s['mean'], '.1f'):>8}   "
                          f"{_number(c['median'], '.1f'):>10}{_number(c['p99'], '.1f'):>8}")
+        for part in ("controller", "tick"):
+            c = row["standing_ticks_cpu_us"][part]
+            lines.append(f"{row['state']:<10}{part + ' (standing)':<24}{'-':>8}{'-':>8}"
+                         f"{'-':>8}   {_number(c['median'], '.1f'):>10}"
+                         f"{_number(c['p99'], '.1f'):>8}")
     lines.append("")
-    lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument): " + (
-        ", ".join(f"{row['state']} {row['real_time_factor']:.2f} (sim time over CPU time "
-                  f"{row['sim_over_cpu']:.2f}, cpu share {row['cpu_share']:.2f}, "
-                  f"{row['status']})" for row in timing["runs"])))
+    lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument):")
+    for row in timing["runs"]:
+        lines.append(
+            f"  {row['state']}: walking {row['real_time_factor']:.2f} (sim time over CPU time "
+            f"{row['sim_over_cpu']:.2f}, cpu share {row['cpu_share']:.2f}, {row['status']}); "
+            f"standing, the same run: {row['standing_real_time_factor']:.2f} (over CPU time "
+            f"{row['standing_sim_over_cpu']:.2f})")
     return "\n".join(lines)

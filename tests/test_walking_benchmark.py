@@ -16,6 +16,7 @@ from benchmarks.walking import (
     WalkRun,
     measure,
     push_instants,
+    run_standing,
     run_walk,
 )
 from benchmarks.walking_report import format_report, tracking_error
@@ -93,7 +94,9 @@ def _report() -> dict:
                 {"state": "estimate", "status": "SUCCEEDED", "fell": False,
                  "real_time_factor": 2.5, "sim_over_cpu": 2.8, "cpu_share": 0.9, "sim_s": 3.9,
                  "walking_ticks_us": {"controller": stats, "tick": stats},
-                 "walking_ticks_cpu_us": {"controller": cpu, "tick": cpu}}]}}
+                 "walking_ticks_cpu_us": {"controller": cpu, "tick": cpu},
+                 "standing_ticks_cpu_us": {"controller": cpu, "tick": cpu},
+                 "standing_real_time_factor": 5.0, "standing_sim_over_cpu": 6.0}]}}
 
 
 def test_the_report_has_a_row_per_run_with_units():
@@ -104,9 +107,13 @@ def test_the_report_has_a_row_per_run_with_units():
                            "0.000", "0.020", "forward", "-10.0", "%", "+2.3", "0.320", "0"]
     assert "[m/s]" in text and "[rad/s]" in text and "[deg]" in text
     assert "Pushes of 5 N s (50 N for 0.1 s)" in text and "fell in 0 of 1" in text
-    assert "estimate  controller     120.0   300.0   130.0        100.0   150.0" in text
-    assert ("estimate 2.50 (sim time over CPU time 2.80, cpu share 0.90, SUCCEEDED)"
-            in text)
+    rows = [line.split() for line in text.splitlines() if line.startswith("estimate  ")]
+    assert rows == [["estimate", "controller", "120.0", "300.0", "130.0", "100.0", "150.0"],
+                    ["estimate", "tick", "120.0", "300.0", "130.0", "100.0", "150.0"],
+                    ["estimate", "controller", "(standing)", "-", "-", "-", "100.0", "150.0"],
+                    ["estimate", "tick", "(standing)", "-", "-", "-", "100.0", "150.0"]]
+    assert ("estimate: walking 2.50 (sim time over CPU time 2.80, cpu share 0.90, "
+            "SUCCEEDED); standing, the same run: 5.00 (over CPU time 6.00)") in text
 
 
 @pytest.mark.slow  # a loop built and 2 s walked: several seconds
@@ -121,3 +128,6 @@ def test_a_short_walk_runs_timed_and_measured_as_the_benchmark_runs_it():
     plain = run_walk(WalkRun((0.5, 0.0, 0.0), 1.0), traced=False)
     assert plain["status"] == "SUCCEEDED" and not plain["fell"]
     assert plain["real_time_factor"] > 0 and "measured" not in plain
+    standing = run_standing("truth", 0.2, clock=time.thread_time)
+    assert standing["ticks_us"]["tick"]["samples"] == 200
+    assert standing["ticks_us"]["estimator"]["median"] < 20  # the truth: nothing to estimate
