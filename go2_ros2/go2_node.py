@@ -1,5 +1,5 @@
-"""The GO2's ROS 2 node: the control loop's actions as rclpy action servers, and its state
-topics, on an executor spinning in its own threads.
+"""The GO2's ROS 2 node: the control loop's actions as rclpy action servers, its state
+topics, and ``/cmd_vel`` into its velocity stream, on an executor spinning in its own threads.
 
 :class:`Go2Node` wraps a control loop (:class:`actions.robot.control_loop.ControlLoop`, on the
 simulated GO2 or a GO2 on DDS). Its executor never runs inside the control tick: goals and
@@ -25,6 +25,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.utilities import get_rmw_implementation_identifier
 
+from go2_ros2.cmd_vel_subscriber import CmdVelSubscriber
 from go2_ros2.ros_action_server import RosActionServer
 from go2_ros2.ros_names import DEFAULT_NODE_NAME, ROS_ACTION_NAMES, ros_action_type
 from go2_ros2.state_publisher import StatePublisher
@@ -71,6 +72,7 @@ class Go2Node:
                             for local, ros_name in ROS_ACTION_NAMES.items()]
             self.state = StatePublisher(self.node, sim_time=sim_time,
                                         on_start=partial(promote_thread, thread_priority))
+            self.cmd_vel = CmdVelSubscriber(self.node, loop)
         except BaseException:
             rclpy.try_shutdown(context=self.context)
             raise
@@ -118,6 +120,7 @@ class Go2Node:
             self._thread.join(timeout=2.0)
         for server in self.servers:
             server.destroy()
+        self.cmd_vel.destroy()
         self.node.destroy_node()
         rclpy.try_shutdown(context=self.context)
         if self._switch_interval is not None:

@@ -44,7 +44,7 @@ from actions.action_type import INTERFACES_DIR
 #: definitions), shipped with this package.
 PACKAGES_DIR = Path(__file__).resolve().parent / "packages"
 #: The GO2's actions copied from the library's definitions into ``go2_interfaces``.
-GO2_ACTIONS = ("HighFive", "Stand", "Sit")
+GO2_ACTIONS = ("HighFive", "Stand", "Sit", "Walk")
 #: Built in this order; each is importable as ``<name>.action`` afterwards.
 PACKAGE_NAMES = ("go2_interfaces", "control_msgs")
 #: The modules the build must make importable.

@@ -8,6 +8,7 @@ from actions.go2.go2_actions import (
     HIGH_FIVE_ACTION,
     SIT_ACTION,
     STAND_ACTION,
+    WALK_ACTION,
 )
 
 #: The runner's action name -> its ROS 2 name, relative (the node's namespace applies);
@@ -17,12 +18,14 @@ ROS_ACTION_NAMES: dict[str, str] = {
     STAND_ACTION: "stand",
     SIT_ACTION: "sit",
     FOLLOW_JOINT_TRAJECTORY_ACTION: "joint_trajectory_controller/follow_joint_trajectory",
+    WALK_ACTION: "walk",
 }
 #: The runner's action name -> ``(module, class)`` of its rosidl type.
 ROS_ACTION_TYPES: dict[str, tuple[str, str]] = {
     HIGH_FIVE_ACTION: ("go2_interfaces.action", "HighFive"),
     STAND_ACTION: ("go2_interfaces.action", "Stand"),
     SIT_ACTION: ("go2_interfaces.action", "Sit"),
+    WALK_ACTION: ("go2_interfaces.action", "Walk"),
     FOLLOW_JOINT_TRAJECTORY_ACTION: ("control_msgs.action", "FollowJointTrajectory"),
 }
 #: The node's default name.

@@ -24,7 +24,7 @@ from go2_ros2.interface_build import (
 
 def test_the_go2_actions_are_the_library_s_own_definitions() -> None:
     files = source_files()
-    for name in ("HighFive", "Stand", "Sit"):
+    for name in ("HighFive", "Stand", "Sit", "Walk"):
         assert files[f"go2_interfaces/action/{name}.action"] == (
             Path(INTERFACES_DIR) / f"{name}.action").read_bytes()
     assert {"go2_interfaces/CMakeLists.txt", "go2_interfaces/package.xml",

@@ -36,13 +36,14 @@ INSTALL_HINT = ("the ros2 extra is not installed: pip install 'go2-wbc[ros2]', t
 RATES_HZ = (1000, 500)
 
 ROS2_HELP = """\
-the node serves the actions /high_five, /stand, /sit and
+the node serves the actions /high_five, /stand, /sit, /walk and
 /joint_trajectory_controller/follow_joint_trajectory (go2_interfaces/action/HighFive, Stand,
-Sit; control_msgs/action/FollowJointTrajectory) and publishes /joint_states, /imu, /odom
-(from the state estimator) and /clock (the simulated time: clients use use_sim_time:=true to
-stamp with it). Goals are accepted or rejected for the same reasons as everywhere in go2-wbc
-(logged by the node: ROS 2's goal response carries no reason); a goal while another runs is
-rejected.
+Sit, Walk; control_msgs/action/FollowJointTrajectory), walks on geometry_msgs/Twist from
+/cmd_vel (linear.x, linear.y, angular.z; stopped 0.5 s after the last one), and publishes
+/joint_states, /imu, /odom (from the state estimator) and /clock (the simulated time: clients
+use use_sim_time:=true to stamp with it). Goals are accepted or rejected for the same reasons
+as everywhere in go2-wbc (logged by the node: ROS 2's goal response carries no reason); a goal
+while another runs is rejected.
 
 examples:
   go2-wbc ros2                                           # the simulated GO2 as a ROS 2 node
