@@ -3,6 +3,7 @@ writes the MCAP file (counts, lines, drops when the pipe is full, a port it cann
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 import socket
@@ -21,6 +22,7 @@ from actions.robot.recording_process import (
     unpack_snapshot,
 )
 from actions.robot.tick_stats import SERIES
+from sim.cli.recording_options import recording_summary
 from tests.test_recording import snapshot
 from wbc.core.errors import ConfigurationError
 
@@ -125,3 +127,7 @@ def test_a_child_that_dies_never_stops_the_loop_and_is_said(tmp_path, standing):
     recording.close()
     assert recording.taken == 5 and recording.dropped == 5 and recording.logged == 0
     assert recording.error.startswith("the writer process ended (Broken pipe, exit code -9)")
+    args = argparse.Namespace(mcap=tmp_path / "k.mcap", foxglove=None)
+    assert recording_summary(args, recording) == (
+        f"wrote {tmp_path / 'k.mcap'} (0 snapshots at 1000 Hz, 5 dropped); recording "
+        f"incomplete: {recording.error}")
