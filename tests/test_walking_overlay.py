@@ -154,3 +154,31 @@ def test_the_log_holds_the_command_and_the_plot_shows_its_tracking(trotting):
     assert [ax.get_ylabel() for ax in fig.axes][:3] == ["forward [m/s]", "lateral [m/s]",
                                                          "yaw rate [rad/s]"]
     plt.close(fig)
+
+
+def test_go2_wbc_walk_writes_its_plot_and_log(tmp_path):
+    from sim.cli import main
+
+    paths = {name: tmp_path / f"walk.{name}" for name in ("png", "npz")}
+    code, out = run_cli(["walk", "--forward", "0.4", "--yaw-rate", "0.3", "--duration", "1",
+                         "--plot", str(paths["png"]), "--log", str(paths["npz"])], main)
+    assert code == 0, out
+    assert "walk: sending goal (forward 0.4 m/s, lateral 0 m/s, yaw rate 0.3 rad/s, for 1 s)" in out
+    assert "result: SUCCEEDED" in out
+    log = np.load(paths["npz"])
+    commanded = log["commanded_velocity"]
+    walking = np.isfinite(commanded[:, 0])
+    assert walking.sum() > 900  # the walk's ticks, from its start to its stop
+    assert np.allclose(commanded[walking].max(axis=0), [0.4, 0.0, 0.3])
+    assert paths["png"].read_bytes().startswith(b"\x89PNG")
+
+
+def run_cli(argv: list[str], main) -> tuple[int, str]:
+    """``main(argv)`` in this process: the exit code and what it printed."""
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(argv)
+    return code, out.getvalue()
