@@ -193,7 +193,8 @@ def run_walk(run: WalkRun, *, clock: Callable[[], float] | None = None,
     ticks = TimedTicks(runner.loop, clock=clock) if clock is not None else None
     result = runner.run(tick=ticks)
     out: dict[str, Any] = {
-        "status": result.status, "sim_s": result.sim_s, "wall_s": result.wall_s,
+        "status": result.status, "message": result.message, "sim_s": result.sim_s,
+        "wall_s": result.wall_s,
         "real_time_factor": result.sim_s / max(result.wall_s, 1e-9),
         "sim_over_cpu": result.sim_s / max(result.cpu_s, 1e-9),
         "cpu_share": result.cpu_s / max(result.wall_s, 1e-9), "ticks": result.ticks}

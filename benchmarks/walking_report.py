@@ -19,7 +19,8 @@ def tracking_error(row: dict[str, Any]) -> str:
     parts = []
     for k, (name, _) in enumerate(_AXES):
         if row["command"][k]:
-            parts.append(f"{name} {_number(100.0 * row['relative_error'][k], '+.1f')} %")
+            error = 100.0 * row["relative_error"][k]
+            parts.append(f"{name} {error:+.1f} %" if math.isfinite(error) else f"{name} -")
     return ", ".join(parts) or "in place"
 
 
@@ -49,6 +50,8 @@ def format_report(report: dict[str, Any]) -> str:
             f"{tracking_error(row):<28}{_number(row['yaw_drift_deg'], '+.1f'):>9}"
             f"{_number(row['height_mean_m'], '.3f'):>7}"
             f"{_number(row['height_range_mm'], '.0f'):>6}")
+    lines += [f"  {row['name']} on the {row['state']}: {row['status']}: {row['message']}"
+              for row in report["tracking"] if row["status"] != "SUCCEEDED"]
     pushes = report["pushes"]
     force_n = pushes["impulse_ns"] / pushes["duration_s"]
     lines += ["", (f"Pushes of {pushes['impulse_ns']:g} N s ({force_n:g} N for "
@@ -61,6 +64,8 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"{row['direction_deg']:<16}{row['at_s']:>7.2f}  {row['status']:<10}"
                      f"{'yes' if row['fell'] else 'no':<5}{row['min_height_m']:>15.3f}"
                      f"{row['max_tilt_deg']:>15.1f}")
+    lines += [f"  toward {row['direction_deg']} deg: {row['status']}: {row['message']}"
+              for row in pushes["runs"] if row["status"] != "SUCCEEDED"]
     lines.append(f"fell in {pushes['fell']} of {len(pushes['runs'])}")
     timing = report["timing"]
     lines += ["", (f"The tick while walking ({timing['control_rate_hz']:g} Hz, "

@@ -81,12 +81,13 @@ def test_push_instants_are_seeded_and_leave_time_to_recover():
 def _report() -> dict:
     walk = measure(trace(0.45, 0.0, 0.02), (0.5, 0.0, 0.0))
     row = {"name": "forward 0.5 m/s", "command": [0.5, 0.0, 0.0], "state": "estimate",
-           "status": "SUCCEEDED", **walk}
+           "status": "SUCCEEDED", "message": "walk done", **walk}
+    aborted = {**row, "state": "truth", "status": "ABORTED", "message": "aborted: a fault"}
     stats = {"median": 120.0, "p99": 300.0, "mean": 130.0, "samples": 10}
     cpu = {"median": 100.0, "p99": 150.0, "mean": 105.0, "samples": 10}
     return {"machine": {"cpu": "cpu", "cores": 2, "load_average_1_5_15_min": [3.0, 2, 1],
                         "python": "3.11", "versions": {"mujoco": "4.0.0"}},
-            "mode": "quick", "walk_s": 3.0, "settle_into_walk_s": 1.0, "tracking": [row],
+            "mode": "quick", "walk_s": 3.0, "settle_into_walk_s": 1.0, "tracking": [row, aborted],
             "pushes": {"impulse_ns": 5.0, "duration_s": 0.1, "speed_mps": 0.5, "seed": 31,
                        "walk_s": 4.0, "fell": 0,
                        "runs": [{"direction_deg": 90, "at_s": 2.1, **row}]},
@@ -106,6 +107,7 @@ def test_the_report_has_a_row_per_run_with_units():
     assert row.split() == ["forward", "0.5", "m/s", "estimate", "SUCCEEDED", "no", "0.450",
                            "0.000", "0.020", "forward", "-10.0", "%", "+2.3", "0.320", "0"]
     assert "[m/s]" in text and "[rad/s]" in text and "[deg]" in text
+    assert "  forward 0.5 m/s on the truth: ABORTED: aborted: a fault" in text
     assert "Pushes of 5 N s (50 N for 0.1 s)" in text and "fell in 0 of 1" in text
     rows = [line.split() for line in text.splitlines() if line.startswith("estimate  ")]
     assert rows == [["estimate", "controller", "120.0", "300.0", "130.0", "100.0", "150.0"],
