@@ -35,22 +35,24 @@ def format_report(report: dict[str, Any]) -> str:
               "plant, go2 sensors; measured on the simulator's truth, the mean over the "
               f"walking phase from {report['settle_into_walk_s']:g} s after it began"), "",
              "Speed tracking (velocities in the heading frame)"]
-    head = (f"{'command':<17}{'state':<9}{'status':<10}{'fell':<5}{'forward':>8}"
+    head = (f"{'command':<17}{'state':<9}{'Hz':>5} {'status':<10}{'fell':<5}{'forward':>8}"
             f"{'lateral':>8}{'yaw':>7}  {'error against the command':<28}{'yaw drift':>9}"
             f"{'height':>7}{'range':>6}")
-    units = (f"{'':<41}{'[m/s]':>8}{'[m/s]':>8}{'[rad/s]':>7}  {'':<28}{'[deg]':>9}"
+    units = (f"{'':<47}{'[m/s]':>8}{'[m/s]':>8}{'[rad/s]':>7}  {'':<28}{'[deg]':>9}"
              f"{'[m]':>7}{'[mm]':>6}")
     lines += [head, units, "-" * len(head)]
     for row in report["tracking"]:
         measured = row["measured"]
         lines.append(
-            f"{row['name']:<17}{row['state']:<9}{row['status']:<10}"
+            f"{row['name']:<17}{row['state']:<9}{row['control_rate_hz']:>5.0f} "
+            f"{row['status']:<10}"
             f"{'yes' if row['fell'] else 'no':<5}{_number(measured[0], '.3f'):>8}"
             f"{_number(measured[1], '.3f'):>8}{_number(measured[2], '.3f'):>7}  "
             f"{tracking_error(row):<28}{_number(row['yaw_drift_deg'], '+.1f'):>9}"
             f"{_number(row['height_mean_m'], '.3f'):>7}"
             f"{_number(row['height_range_mm'], '.0f'):>6}")
-    lines += [f"  {row['name']} on the {row['state']}: {row['status']}: {row['message']}"
+    lines += [f"  {row['name']} on the {row['state']} at {row['control_rate_hz']:g} Hz: "
+              f"{row['status']}: {row['message']}"
               for row in report["tracking"] if row["status"] != "SUCCEEDED"]
     pushes = report["pushes"]
     force_n = pushes["impulse_ns"] / pushes["duration_s"]

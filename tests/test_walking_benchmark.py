@@ -81,7 +81,7 @@ def test_push_instants_are_seeded_and_leave_time_to_recover():
 def _report() -> dict:
     walk = measure(trace(0.45, 0.0, 0.02), (0.5, 0.0, 0.0))
     row = {"name": "forward 0.5 m/s", "command": [0.5, 0.0, 0.0], "state": "estimate",
-           "status": "SUCCEEDED", "message": "walk done", **walk}
+           "status": "SUCCEEDED", "message": "walk done", "control_rate_hz": 1000.0, **walk}
     aborted = {**row, "state": "truth", "status": "ABORTED", "message": "aborted: a fault"}
     stats = {"median": 120.0, "p99": 300.0, "mean": 130.0, "samples": 10}
     cpu = {"median": 100.0, "p99": 150.0, "mean": 105.0, "samples": 10}
@@ -104,10 +104,10 @@ def test_the_report_has_a_row_per_run_with_units():
     text = format_report(_report())
     assert "load 3.00 at start" in text
     row = next(line for line in text.splitlines() if line.startswith("forward 0.5 m/s"))
-    assert row.split() == ["forward", "0.5", "m/s", "estimate", "SUCCEEDED", "no", "0.450",
+    assert row.split() == ["forward", "0.5", "m/s", "estimate", "1000", "SUCCEEDED", "no", "0.450",
                            "0.000", "0.020", "forward", "-10.0", "%", "+2.3", "0.320", "0"]
     assert "[m/s]" in text and "[rad/s]" in text and "[deg]" in text
-    assert "  forward 0.5 m/s on the truth: ABORTED: aborted: a fault" in text
+    assert "  forward 0.5 m/s on the truth at 1000 Hz: ABORTED: aborted: a fault" in text
     assert "Pushes of 5 N s (50 N for 0.1 s)" in text and "fell in 0 of 1" in text
     rows = [line.split() for line in text.splitlines() if line.startswith("estimate  ")]
     assert rows == [["estimate", "controller", "120.0", "300.0", "130.0", "100.0", "150.0"],
