@@ -15,6 +15,7 @@ from mcap.reader import make_reader
 
 from actions.robot.recording_process import (
     FRAME_BYTES,
+    LINE_BYTES,
     PIPE_BYTES,
     RecordingProcess,
     SnapshotFrame,
@@ -131,3 +132,15 @@ def test_a_child_that_dies_never_stops_the_loop_and_is_said(tmp_path, standing):
     assert recording_summary(args, recording) == (
         f"wrote {tmp_path / 'k.mcap'} (0 snapshots at 1000 Hz, 5 dropped); recording "
         f"incomplete: {recording.error}")
+
+
+@pytest.mark.slow
+def test_a_long_line_is_cut_to_fit_one_frame(tmp_path):
+    recording = RecordingProcess(mcap_path=tmp_path / "l.mcap", control_period_s=1e-3)
+    recording.line("é" * 5000, 0.0)  # 10,000 bytes of UTF-8
+    recording.close()
+    assert recording.error == ""
+    with open(tmp_path / "l.mcap", "rb") as f:
+        (log,) = [m.data for _, _, m in make_reader(f).iter_messages(topics=["/log"])]
+    assert "é" * (LINE_BYTES // 2) in log.decode(errors="ignore")
+    assert "é" * (LINE_BYTES // 2 + 1) not in log.decode(errors="ignore")

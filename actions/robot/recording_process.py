@@ -40,8 +40,11 @@ PIPE_BYTES = 1 << 20
 START_TIMEOUT_S = 120.0
 #: Longest wait [s] for the child to finish the file after the last frame.
 CLOSE_TIMEOUT_S = 120.0
-#: Printed lines held in the parent while the pipe is full (they are never dropped before).
+#: Printed lines held in the parent while the pipe is full (beyond, the oldest is dropped).
 PENDING_LINES = 10_000
+#: A printed line's longest text [bytes of UTF-8] (cut beyond), so that its frame stays
+#: within PIPE_BUF (4096 bytes): a larger non-blocking write may be cut by the kernel.
+LINE_BYTES = 3_500
 #: The float fields of a snapshot frame, in order, with their lengths.
 _FLOATS = (("t_s", 1), ("q", 19), ("v", 18), ("tau", 12), ("foot_target", 12),
            ("tick_us", 1), ("com_margin_m", 1), ("estimate_contact", 4), ("q_true", 19),
@@ -242,8 +245,10 @@ class RecordingProcess:
 
     def line(self, text: str, t_s: float, *, level: str = "info", name: str = "go2-wbc"
              ) -> None:
-        """A log line at robot time ``t_s`` [s]; held here while the pipe is full."""
-        self._pending.append(_LINE + pickle.dumps((text, t_s, level, name)))
+        """A log line at robot time ``t_s`` [s] (its first :data:`LINE_BYTES`); held here
+        while the pipe is full."""
+        text = text.encode()[:LINE_BYTES].decode(errors="ignore")
+        self._pending.append(_LINE + pickle.dumps((text, t_s, level, name[:100])))
         if len(self._pending) > PENDING_LINES:
             self._pending.popleft()
         self._flush()
@@ -274,12 +279,16 @@ class RecordingProcess:
         ``False``; the control loop never sees the recording's failure)."""
         if self.error:
             return False
+        frame = _LENGTH.pack(len(payload)) + payload
         try:
-            os.write(self._pipe.fileno(), _LENGTH.pack(len(payload)) + payload)
+            written = os.write(self._pipe.fileno(), frame)
         except BlockingIOError:
             return False
         except OSError as err:  # a broken pipe: the child ended
             self.error = f"the writer process ended ({err.strerror}, exit code {self._exitcode()})"
+            return False
+        if written != len(frame):  # never within PIPE_BUF; the frames after would be garbled
+            self.error = f"a frame of {len(frame)} bytes was cut at {written}"
             return False
         return True
 
