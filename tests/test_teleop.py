@@ -100,3 +100,59 @@ def test_bad_options_are_one_line_naming_the_option(capsys, monkeypatch, argv, m
     assert info.value.code == EXIT_USAGE
     assert capsys.readouterr().err.splitlines()[-1] == (
         f"go2-wbc teleop: error: {message} (see 'go2-wbc teleop --help')")
+
+
+@pytest.mark.slow
+def test_teleop_in_a_pseudo_terminal_walks_the_simulated_go2_and_quits_standing():
+    """The command as a user runs it: keys through a terminal in raw mode, the simulated
+    GO2 on the wall clock; three presses of w, a stop, Ctrl-C."""
+    import os
+    import pty
+    import select
+    import sys
+    import time
+
+    pid, fd = pty.fork()
+    if pid == 0:  # the child: go2-wbc teleop on the pseudo-terminal
+        os.execv(sys.executable, [sys.executable, "-m", "sim.cli", "teleop"])
+    output = bytearray()
+
+    def read_until(pattern: bytes | None, timeout_s: float) -> None:
+        """Read the child's output until ``pattern`` came (``None``: for ``timeout_s``)."""
+        end = time.monotonic() + timeout_s
+        while pattern is None or pattern not in output:
+            if time.monotonic() >= end:
+                assert pattern is None, f"no {pattern!r} in {bytes(output[-2000:])!r}"
+                return
+            if select.select([fd], [], [], 0.05)[0]:
+                try:
+                    output.extend(os.read(fd, 4096))
+                except OSError:  # the child closed the terminal
+                    return
+
+    try:
+        read_until(b"| measured:", 180.0)  # started: the first status line
+        os.write(fd, b"www")
+        read_until(b"command: forward +0.30", 10.0)
+        mark = len(output)
+        read_until(None, 4.0)  # the walk starts and settles at its speed
+        walking = bytes(output[mark:]).split(b"\r\x1b[K")
+        os.write(fd, b" ")
+        read_until(None, 2.0)
+        os.write(fd, b"\x03")
+        read_until(b"stopped at", 30.0)
+        _, status = os.waitpid(pid, 0)
+        read_until(b"in the truth", 5.0)
+    finally:
+        try:
+            os.kill(pid, 9)
+        except ProcessLookupError:
+            pass
+        os.close(fd)
+    assert os.waitstatus_to_exitcode(status) == 0, bytes(output[-2000:])
+    speeds = [float(line.split(b"measured: forward ")[1].split(b" ")[0])
+              for line in walking[-8:] if b"measured: forward " in line]
+    print(f"\nteleop at 0.3 m/s: measured forward {speeds} m/s; "
+          f"{bytes(output).split(b'stopped at')[1][:120]!r}")
+    assert speeds and all(0.15 < speed < 0.45 for speed in speeds)
+    assert b", standing; base at (+" in output  # walked forward, then stood
