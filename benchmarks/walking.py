@@ -242,64 +242,85 @@ def push_instants(count: int, walk_s: float, seed: int = PUSH_SEED) -> list[floa
     return [round(float(x), 3) for x in rng.uniform(low, max(low, high), size=count)]
 
 
-def run(*, quick: bool = False, log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:
-    """Every run; the report as a dict."""
+#: The benchmark's parts, in the order they run.
+PARTS = ("tracking", "pushes", "timing")
+
+
+def tracking_runs(quick: bool, log: Callable[[str], None]) -> list[dict[str, Any]]:
+    """The speed-tracking walks (part 1)."""
     walk_s = QUICK_WALK_S if quick else WALK_S
-    tracking = []
     plan = [(case, state, 1e-3) for case in (QUICK_SPEED_CASES if quick else SPEED_CASES)
             for state in STATES]
     plan += [] if quick else [(case, "estimate", 2e-3) for case in SLOW_RATE_CASES]
+    rows = []
     for (name, command), state, period_s in plan:
         log(f"speed tracking: {name} on the {state} at {1 / period_s:g} Hz")
-        tracking.append({"name": name, "command": list(command), "state": state,
-                         "control_rate_hz": 1.0 / period_s,
-                         **run_walk(WalkRun(command, walk_s, state=state,
-                                            control_period_s=period_s))})
+        rows.append({"name": name, "command": list(command), "state": state,
+                     "control_rate_hz": 1.0 / period_s,
+                     **run_walk(WalkRun(command, walk_s, state=state,
+                                        control_period_s=period_s))})
+    return rows
+
+
+def push_runs(quick: bool, log: Callable[[str], None]) -> dict[str, Any]:
+    """The pushes while trotting (part 2)."""
+    walk_s = QUICK_WALK_S + 1.0 if quick else max(WALK_S, PUSH_WINDOW_S[1] + PUSH_RECOVERY_S)
     directions = QUICK_PUSH_DIRECTIONS_DEG if quick else PUSH_DIRECTIONS_DEG
-    push_walk_s = max(walk_s, PUSH_WINDOW_S[1] + PUSH_RECOVERY_S) if not quick else walk_s + 1
-    instants = push_instants(len(directions), push_walk_s)
-    pushes = []
-    for direction, into_walk_s in zip(directions, instants, strict=True):
+    rows = []
+    for direction, into_walk_s in zip(directions, push_instants(len(directions), walk_s),
+                                      strict=True):
         # The walk goal is sent at SETTLE_S; its walking starts after a short start-up.
         push = Push(at_s=SETTLE_S + into_walk_s, force_n=PUSH_IMPULSE_NS / PUSH_DURATION_S,
                     duration_s=PUSH_DURATION_S, direction_deg=direction,
                     relative_to_heading=True)
         log(f"push {PUSH_IMPULSE_NS:g} N s toward {direction} deg at {push.at_s:g} s")
-        outcome = run_walk(WalkRun((PUSH_SPEED_MPS, 0.0, 0.0), push_walk_s, pushes=(push,)))
-        pushes.append({"direction_deg": direction, "at_s": push.at_s, **outcome})
+        outcome = run_walk(WalkRun((PUSH_SPEED_MPS, 0.0, 0.0), walk_s, pushes=(push,)))
+        rows.append({"direction_deg": direction, "at_s": push.at_s, **outcome})
+    return {"impulse_ns": PUSH_IMPULSE_NS, "duration_s": PUSH_DURATION_S,
+            "speed_mps": PUSH_SPEED_MPS, "walk_s": walk_s, "seed": PUSH_SEED, "runs": rows,
+            "fell": sum(p["fell"] for p in rows)}
+
+
+def timing_runs(quick: bool, log: Callable[[str], None]) -> dict[str, Any]:
+    """The tick's cost and the real-time factors, walking and standing (part 3)."""
     timing_s = QUICK_TIMING_WALK_S if quick else TIMING_WALK_S
-    timing = []
+    rows = []
     for state in STATES:
-        log(f"the tick's cost at 1 kHz on the {state}")
+        log(f"the tick's cost at 1 kHz on the {state}, walking then standing")
         timed = WalkRun((PUSH_SPEED_MPS, 0.0, 0.0), timing_s, state=state,
                         control_period_s=TIMING_PERIOD_S)
-        wall = run_walk(timed, clock=time.perf_counter)
+        # The two CPU-time runs back to back: the machine's load alike for both.
         cpu = run_walk(timed, clock=time.thread_time)
-        plain = run_walk(timed, traced=False)
-        log(f"the yardstick: standing at 1 kHz on the {state}")
         standing = run_standing(state, timing_s, clock=time.thread_time)
+        wall = run_walk(timed, clock=time.perf_counter)
+        plain = run_walk(timed, traced=False)
         standing_plain = run_standing(state, timing_s)
-        timing.append({"state": state, "status": plain["status"], "fell": plain["fell"],
-                       "standing_ticks_cpu_us": standing["ticks_us"],
-                       "standing_real_time_factor": standing_plain["real_time_factor"],
-                       "standing_sim_over_cpu": standing_plain["sim_over_cpu"],
-                       "real_time_factor": plain["real_time_factor"],
-                       "sim_over_cpu": plain["sim_over_cpu"],
-                       "cpu_share": plain["cpu_share"], "sim_s": plain["sim_s"],
-                       "walking_ticks_us": wall["walking_ticks_us"],
-                       "walking_ticks_cpu_us": cpu["walking_ticks_us"],
-                       "instrumented_real_time_factor": wall["real_time_factor"]})
-    return {
+        rows.append({"state": state, "status": plain["status"], "fell": plain["fell"],
+                     "standing_ticks_cpu_us": standing["ticks_us"],
+                     "standing_real_time_factor": standing_plain["real_time_factor"],
+                     "standing_sim_over_cpu": standing_plain["sim_over_cpu"],
+                     "real_time_factor": plain["real_time_factor"],
+                     "sim_over_cpu": plain["sim_over_cpu"],
+                     "cpu_share": plain["cpu_share"], "sim_s": plain["sim_s"],
+                     "walking_ticks_us": wall["walking_ticks_us"],
+                     "walking_ticks_cpu_us": cpu["walking_ticks_us"],
+                     "instrumented_real_time_factor": wall["real_time_factor"]})
+    return {"control_rate_hz": 1.0 / TIMING_PERIOD_S, "walk_s": timing_s, "runs": rows}
+
+
+def run(*, quick: bool = False, parts: Sequence[str] = PARTS,
+        log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:
+    """The ``parts`` asked for (all by default); the report as a dict."""
+    report: dict[str, Any] = {
         "machine": machine(PACKAGES, with_platform=False),
         "mode": "quick" if quick else "full",
-        "walk_s": walk_s, "settle_into_walk_s": SETTLE_INTO_WALK_S,
-        "tracking": tracking,
-        "pushes": {"impulse_ns": PUSH_IMPULSE_NS, "duration_s": PUSH_DURATION_S,
-                   "speed_mps": PUSH_SPEED_MPS, "walk_s": push_walk_s, "seed": PUSH_SEED,
-                   "runs": pushes, "fell": sum(p["fell"] for p in pushes)},
-        "timing": {"control_rate_hz": 1.0 / TIMING_PERIOD_S, "walk_s": timing_s,
-                   "runs": timing},
-    }
+        "walk_s": QUICK_WALK_S if quick else WALK_S,
+        "settle_into_walk_s": SETTLE_INTO_WALK_S}
+    for part, runs in (("tracking", tracking_runs), ("pushes", push_runs),
+                       ("timing", timing_runs)):
+        if part in parts:
+            report[part] = runs(quick, log)
+    return report
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -308,11 +329,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
                         help=f"walk {QUICK_WALK_S:g} s, two speed cases, two push directions")
+    parser.add_argument("--only", choices=PARTS, action="append", metavar="PART",
+                        help=f"run only this part, repeatable: {', '.join(PARTS)} "
+                             "(default: all)")
     parser.add_argument("--json", type=Path, default=Path("out/walking.json"),
                         help="where to write the report (default: out/walking.json)")
     args = parser.parse_args(argv)
     started = time.perf_counter()
-    report = run(quick=args.quick, log=lambda msg: print(
+    report = run(quick=args.quick, parts=args.only or PARTS, log=lambda msg: print(
         f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
     report["benchmark_wall_s"] = time.perf_counter() - started
     print(format_report(report))

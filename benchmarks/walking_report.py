@@ -13,6 +13,10 @@ def _number(value: float, spec: str) -> str:
     return "-" if value is None or not math.isfinite(value) else format(value, spec)
 
 
+def _ratio(walking: dict[str, Any], standing: dict[str, Any], part: str) -> str:
+    return _number(walking[part]["median"] / standing[part]["median"], ".2f")
+
+
 def tracking_error(row: dict[str, Any]) -> str:
     """Each commanded component's error relative to the command, in percent
     (``forward -3.2 %``); a walk on the spot: its largest speed [m/s]."""
@@ -33,15 +37,26 @@ def format_report(report: dict[str, Any]) -> str:
               f"{versions}"),
              (f"Mode: {report['mode']}. Walk goals of {report['walk_s']:g} s on the menagerie "
               "plant, go2 sensors; measured on the simulator's truth, the mean over the "
-              f"walking phase from {report['settle_into_walk_s']:g} s after it began"), "",
-             "Speed tracking (velocities in the heading frame)"]
+              f"walking phase from {report['settle_into_walk_s']:g} s after it began")]
+    if "tracking" in report:
+        lines += ["", *tracking_lines(report["tracking"])]
+    if "pushes" in report:
+        lines += ["", *push_lines(report["pushes"])]
+    if "timing" in report:
+        lines += ["", *timing_lines(report["timing"])]
+    return "\n".join(lines)
+
+
+def tracking_lines(tracking: list[dict[str, Any]]) -> list[str]:
+    """The speed-tracking table."""
+    lines = ["Speed tracking (velocities in the heading frame)"]
     head = (f"{'command':<17}{'state':<9}{'Hz':>5} {'status':<10}{'fell':<5}{'forward':>8}"
             f"{'lateral':>8}{'yaw':>7}  {'error against the command':<28}{'yaw drift':>9}"
             f"{'height':>7}{'range':>6}")
     units = (f"{'':<47}{'[m/s]':>8}{'[m/s]':>8}{'[rad/s]':>7}  {'':<28}{'[deg]':>9}"
              f"{'[m]':>7}{'[mm]':>6}")
     lines += [head, units, "-" * len(head)]
-    for row in report["tracking"]:
+    for row in tracking:
         measured = row["measured"]
         lines.append(
             f"{row['name']:<17}{row['state']:<9}{row['control_rate_hz']:>5.0f} "
@@ -53,15 +68,19 @@ def format_report(report: dict[str, Any]) -> str:
             f"{_number(row['height_range_mm'], '.0f'):>6}")
     lines += [f"  {row['name']} on the {row['state']} at {row['control_rate_hz']:g} Hz: "
               f"{row['status']}: {row['message']}"
-              for row in report["tracking"] if row["status"] != "SUCCEEDED"]
-    pushes = report["pushes"]
+              for row in tracking if row["status"] != "SUCCEEDED"]
+    return lines
+
+
+def push_lines(pushes: dict[str, Any]) -> list[str]:
+    """The pushes' table."""
     force_n = pushes["impulse_ns"] / pushes["duration_s"]
-    lines += ["", (f"Pushes of {pushes['impulse_ns']:g} N s ({force_n:g} N for "
-                   f"{pushes['duration_s']:g} s) on the base while trotting at "
-                   f"{pushes['speed_mps']:g} m/s on the estimate, directions from the heading "
-                   f"(0 forward, 90 left), at seeded instants (seed {pushes['seed']})"),
-              (f"{'direction [deg]':<16}{'at [s]':>7}  {'status':<10}{'fell':<5}"
-               f"{'min height [m]':>15}{'max tilt [deg]':>15}")]
+    lines = [(f"Pushes of {pushes['impulse_ns']:g} N s ({force_n:g} N for "
+              f"{pushes['duration_s']:g} s) on the base while trotting at "
+              f"{pushes['speed_mps']:g} m/s on the estimate, directions from the heading "
+              f"(0 forward, 90 left), at seeded instants (seed {pushes['seed']})"),
+             (f"{'direction [deg]':<16}{'at [s]':>7}  {'status':<10}{'fell':<5}"
+              f"{'min height [m]':>15}{'max tilt [deg]':>15}")]
     for row in pushes["runs"]:
         lines.append(f"{row['direction_deg']:<16}{row['at_s']:>7.2f}  {row['status']:<10}"
                      f"{'yes' if row['fell'] else 'no':<5}{row['min_height_m']:>15.3f}"
@@ -69,12 +88,16 @@ def format_report(report: dict[str, Any]) -> str:
     lines += [f"  toward {row['direction_deg']} deg: {row['status']}: {row['message']}"
               for row in pushes["runs"] if row["status"] != "SUCCEEDED"]
     lines.append(f"fell in {pushes['fell']} of {len(pushes['runs'])}")
-    timing = report["timing"]
-    lines += ["", (f"The tick while walking ({timing['control_rate_hz']:g} Hz, "
-                   f"forward 0.5 m/s for {timing['walk_s']:g} s; ticks of the walking phase, "
-                   "[us]: on the wall clock, and on the thread's CPU time)"),
-              (f"{'state':<10}{'part':<24}{'median':>8}{'p99':>8}{'mean':>8}   "
-               f"{'cpu median':>10}{'cpu p99':>8}")]
+    return lines
+
+
+def timing_lines(timing: dict[str, Any]) -> list[str]:
+    """The tick's cost and the real-time factors."""
+    lines = [(f"The tick while walking ({timing['control_rate_hz']:g} Hz, "
+              f"forward 0.5 m/s for {timing['walk_s']:g} s; ticks of the walking phase, "
+              "[us]: on the wall clock, and on the thread's CPU time)"),
+             (f"{'state':<10}{'part':<24}{'median':>8}{'p99':>8}{'mean':>8}   "
+              f"{'cpu median':>10}{'cpu p99':>8}")]
     for row in timing["runs"]:
         for part, s in row["walking_ticks_us"].items():
             c = row["walking_ticks_cpu_us"][part]
@@ -86,6 +109,12 @@ def format_report(report: dict[str, Any]) -> str:
             lines.append(f"{row['state']:<10}{part + ' (standing)':<24}{'-':>8}{'-':>8}"
                          f"{'-':>8}   {_number(c['median'], '.1f'):>10}"
                          f"{_number(c['p99'], '.1f'):>8}")
+    lines.append("Walking over standing, CPU medians of the same run: " + "; ".join(
+        f"{row['state']}: tick "
+        f"{_ratio(row['walking_ticks_cpu_us'], row['standing_ticks_cpu_us'], 'tick')}, "
+        f"controller "
+        f"{_ratio(row['walking_ticks_cpu_us'], row['standing_ticks_cpu_us'], 'controller')}"
+        for row in timing["runs"]))
     lines.append("")
     lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument):")
     for row in timing["runs"]:
@@ -94,4 +123,4 @@ def format_report(report: dict[str, Any]) -> str:
             f"{row['sim_over_cpu']:.2f}, cpu share {row['cpu_share']:.2f}, {row['status']}); "
             f"standing, the same run: {row['standing_real_time_factor']:.2f} (over CPU time "
             f"{row['standing_sim_over_cpu']:.2f})")
-    return "\n".join(lines)
+    return lines

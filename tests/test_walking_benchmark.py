@@ -114,8 +114,18 @@ def test_the_report_has_a_row_per_run_with_units():
                     ["estimate", "tick", "120.0", "300.0", "130.0", "100.0", "150.0"],
                     ["estimate", "controller", "(standing)", "-", "-", "-", "100.0", "150.0"],
                     ["estimate", "tick", "(standing)", "-", "-", "-", "100.0", "150.0"]]
+    assert ("Walking over standing, CPU medians of the same run: estimate: tick 1.00, "
+            "controller 1.00") in text
     assert ("estimate: walking 2.50 (sim time over CPU time 2.80, cpu share 0.90, "
             "SUCCEEDED); standing, the same run: 5.00 (over CPU time 6.00)") in text
+
+
+def test_a_report_of_some_parts_has_only_their_tables():
+    report = _report()
+    del report["tracking"], report["pushes"]
+    text = format_report(report)
+    assert "The tick while walking" in text
+    assert "Speed tracking" not in text and "Pushes of" not in text
 
 
 @pytest.mark.slow  # a loop built and 2 s walked: several seconds
