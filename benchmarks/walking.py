@@ -17,15 +17,15 @@ sensors, and measured tick by tick on the simulator's truth (:class:`WalkTrace`)
 2. Pushes while trotting at 0.5 m/s: :data:`PUSH_IMPULSE_NS` on the base in 8 directions
    relative to the heading (0 forward, 90 left), each at a seeded random instant of the
    walk (:func:`push_instants`), on the estimate: fell or not, lowest base, largest tilt.
-3. The tick's cost while walking, at 1 kHz on the estimate and on the truth: an episode whose
-   ticks run as :class:`benchmarks.timed_ticks.TimedTicks` (controller, actions, whole tick:
-   median and p99 over the ticks of the walking phase) on the wall clock, the same on the
-   thread's CPU time (``time.thread_time``: what other processes on a loaded machine do not
-   add), then the same episode untimed for the loop's real-time factor (sim time over wall
-   time, goal to result) and its sim time over the process's CPU time (the real-time factor
-   it would have with a core to itself). The yardstick, in the same run: the robot standing
-   as long, no goal (its ticks' CPU times, its real-time factors): a loaded machine slows
-   both alike, so the ratio of walking to standing is what another machine would see.
+3. The tick's cost while walking, at 1 kHz on the estimate and on the truth: the walking
+   loop and the same robot standing, in one process, taking turns of 100 ticks
+   (:func:`benchmarks.walking_lockstep.lockstep`; controller, actions, whole tick on the
+   wall clock: median and p99 over the ticks of the walking phase, and the ratio of each
+   turn's median to the standing turn's), the walking tick again on the thread's CPU time
+   (``time.thread_time``: what other processes on a loaded machine do not add), then the
+   walk and the standing untimed for the loop's real-time factor (sim time over wall time)
+   and its sim time over the process's CPU time (the real-time factor it would have with a
+   core to itself).
 
 A run fell when its base came down to ``benchmarks.robustness.FALLEN_HEIGHT_M`` or ended
 below standing height or tilted beyond the balance watch's limit. Every run is seeded and in
@@ -53,6 +53,7 @@ from actions.go2.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_de
 from benchmarks.reporting import json_safe, machine
 from benchmarks.robustness import FALLEN_HEIGHT_M
 from benchmarks.timed_ticks import TimedTicks, stats_us
+from benchmarks.walking_lockstep import lockstep
 from benchmarks.walking_report import format_report
 from sim.control_loop import ControlLoop
 from sim.disturbances import Push
@@ -286,25 +287,22 @@ def timing_runs(quick: bool, log: Callable[[str], None]) -> dict[str, Any]:
     timing_s = QUICK_TIMING_WALK_S if quick else TIMING_WALK_S
     rows = []
     for state in STATES:
-        log(f"the tick's cost at 1 kHz on the {state}, walking then standing")
+        log(f"the tick at 1 kHz on the {state}: walking and standing in lockstep")
         timed = WalkRun((PUSH_SPEED_MPS, 0.0, 0.0), timing_s, state=state,
                         control_period_s=TIMING_PERIOD_S)
-        # The two CPU-time runs back to back: the machine's load alike for both.
+        turns = lockstep(timed.episode(), settle_s=SETTLE_S, walk_s=timing_s)
+        log(f"the tick at 1 kHz on the {state}: CPU time, then the real-time factors")
         cpu = run_walk(timed, clock=time.thread_time)
-        standing = run_standing(state, timing_s, clock=time.thread_time)
-        wall = run_walk(timed, clock=time.perf_counter)
         plain = run_walk(timed, traced=False)
         standing_plain = run_standing(state, timing_s)
         rows.append({"state": state, "status": plain["status"], "fell": plain["fell"],
-                     "standing_ticks_cpu_us": standing["ticks_us"],
-                     "standing_real_time_factor": standing_plain["real_time_factor"],
-                     "standing_sim_over_cpu": standing_plain["sim_over_cpu"],
+                     "lockstep": turns,
+                     "walking_ticks_cpu_us": cpu["walking_ticks_us"],
                      "real_time_factor": plain["real_time_factor"],
                      "sim_over_cpu": plain["sim_over_cpu"],
                      "cpu_share": plain["cpu_share"], "sim_s": plain["sim_s"],
-                     "walking_ticks_us": wall["walking_ticks_us"],
-                     "walking_ticks_cpu_us": cpu["walking_ticks_us"],
-                     "instrumented_real_time_factor": wall["real_time_factor"]})
+                     "standing_real_time_factor": standing_plain["real_time_factor"],
+                     "standing_sim_over_cpu": standing_plain["sim_over_cpu"]})
     return {"control_rate_hz": 1.0 / TIMING_PERIOD_S, "walk_s": timing_s, "runs": rows}
 
 

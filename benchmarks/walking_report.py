@@ -13,10 +13,6 @@ def _number(value: float, spec: str) -> str:
     return "-" if value is None or not math.isfinite(value) else format(value, spec)
 
 
-def _ratio(walking: dict[str, Any], standing: dict[str, Any], part: str) -> str:
-    return _number(walking[part]["median"] / standing[part]["median"], ".2f")
-
-
 def tracking_error(row: dict[str, Any]) -> str:
     """Each commanded component's error relative to the command, in percent
     (``forward -3.2 %``); a walk on the spot: its largest speed [m/s]."""
@@ -93,28 +89,22 @@ def push_lines(pushes: dict[str, Any]) -> list[str]:
 
 def timing_lines(timing: dict[str, Any]) -> list[str]:
     """The tick's cost and the real-time factors."""
-    lines = [(f"The tick while walking ({timing['control_rate_hz']:g} Hz, "
-              f"forward 0.5 m/s for {timing['walk_s']:g} s; ticks of the walking phase, "
-              "[us]: on the wall clock, and on the thread's CPU time)"),
-             (f"{'state':<10}{'part':<24}{'median':>8}{'p99':>8}{'mean':>8}   "
-              f"{'cpu median':>10}{'cpu p99':>8}")]
+    lines = [(f"The tick at {timing['control_rate_hz']:g} Hz, walking forward 0.5 m/s for "
+              f"{timing['walk_s']:g} s and standing, in lockstep (turns of "
+              f"{timing['runs'][0]['lockstep']['turn_ticks']} ticks) [us]; the walking tick "
+              "also on the thread's CPU time"),
+             (f"{'state':<10}{'part':<12}{'walking':>8}{'p99':>8}{'cpu':>8}{'cpu p99':>8}"
+              f"{'standing':>9}{'p99':>8}   {'walking/standing per turn p10-p50-p90'}")]
     for row in timing["runs"]:
-        for part, s in row["walking_ticks_us"].items():
-            c = row["walking_ticks_cpu_us"][part]
-            lines.append(f"{row['state']:<10}{part:<24}{_number(s['median'], '.1f'):>8}"
-                         f"{_number(s['p99'], '.1f'):>8}{_number(s['mean'], '.1f'):>8}   "
-                         f"{_number(c['median'], '.1f'):>10}{_number(c['p99'], '.1f'):>8}")
-        for part in ("controller", "tick"):
-            c = row["standing_ticks_cpu_us"][part]
-            lines.append(f"{row['state']:<10}{part + ' (standing)':<24}{'-':>8}{'-':>8}"
-                         f"{'-':>8}   {_number(c['median'], '.1f'):>10}"
-                         f"{_number(c['p99'], '.1f'):>8}")
-    lines.append("Walking over standing, CPU medians of the same run: " + "; ".join(
-        f"{row['state']}: tick "
-        f"{_ratio(row['walking_ticks_cpu_us'], row['standing_ticks_cpu_us'], 'tick')}, "
-        f"controller "
-        f"{_ratio(row['walking_ticks_cpu_us'], row['standing_ticks_cpu_us'], 'controller')}"
-        for row in timing["runs"]))
+        turns = row["lockstep"]
+        for part, s in turns["walking_us"].items():
+            c, st = row["walking_ticks_cpu_us"][part], turns["standing_us"][part]
+            low, mid, high = turns["turn_ratios"][part]
+            lines.append(f"{row['state']:<10}{part:<12}{_number(s['median'], '.1f'):>8}"
+                         f"{_number(s['p99'], '.1f'):>8}{_number(c['median'], '.1f'):>8}"
+                         f"{_number(c['p99'], '.1f'):>8}{_number(st['median'], '.1f'):>9}"
+                         f"{_number(st['p99'], '.1f'):>8}   {_number(low, '.2f')}-"
+                         f"{_number(mid, '.2f')}-{_number(high, '.2f')}")
     lines.append("")
     lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument):")
     for row in timing["runs"]:

@@ -19,6 +19,7 @@ from benchmarks.walking import (
     run_standing,
     run_walk,
 )
+from benchmarks.walking_lockstep import lockstep
 from benchmarks.walking_report import format_report, tracking_error
 
 RATE_HZ = 1000
@@ -94,9 +95,12 @@ def _report() -> dict:
             "timing": {"control_rate_hz": 1000.0, "walk_s": 3.0, "runs": [
                 {"state": "estimate", "status": "SUCCEEDED", "fell": False,
                  "real_time_factor": 2.5, "sim_over_cpu": 2.8, "cpu_share": 0.9, "sim_s": 3.9,
-                 "walking_ticks_us": {"controller": stats, "tick": stats},
+                 "lockstep": {"turn_ticks": 100, "turns": 20,
+                              "walking_us": {"controller": stats, "tick": stats},
+                              "standing_us": {"controller": cpu, "tick": cpu},
+                              "turn_ratios": {"controller": [1.1, 1.2, 1.3],
+                                              "tick": [2.0, 2.5, 3.0]}},
                  "walking_ticks_cpu_us": {"controller": cpu, "tick": cpu},
-                 "standing_ticks_cpu_us": {"controller": cpu, "tick": cpu},
                  "standing_real_time_factor": 5.0, "standing_sim_over_cpu": 6.0}]}}
 
 
@@ -110,12 +114,10 @@ def test_the_report_has_a_row_per_run_with_units():
     assert "  forward 0.5 m/s on the truth at 1000 Hz: ABORTED: aborted: a fault" in text
     assert "Pushes of 5 N s (50 N for 0.1 s)" in text and "fell in 0 of 1" in text
     rows = [line.split() for line in text.splitlines() if line.startswith("estimate  ")]
-    assert rows == [["estimate", "controller", "120.0", "300.0", "130.0", "100.0", "150.0"],
-                    ["estimate", "tick", "120.0", "300.0", "130.0", "100.0", "150.0"],
-                    ["estimate", "controller", "(standing)", "-", "-", "-", "100.0", "150.0"],
-                    ["estimate", "tick", "(standing)", "-", "-", "-", "100.0", "150.0"]]
-    assert ("Walking over standing, CPU medians of the same run: estimate: tick 1.00, "
-            "controller 1.00") in text
+    assert rows == [["estimate", "controller", "120.0", "300.0", "100.0", "150.0", "100.0",
+                     "150.0", "1.10-1.20-1.30"],
+                    ["estimate", "tick", "120.0", "300.0", "100.0", "150.0", "100.0", "150.0",
+                     "2.00-2.50-3.00"]]
     assert ("estimate: walking 2.50 (sim time over CPU time 2.80, cpu share 0.90, "
             "SUCCEEDED); standing, the same run: 5.00 (over CPU time 6.00)") in text
 
@@ -124,7 +126,7 @@ def test_a_report_of_some_parts_has_only_their_tables():
     report = _report()
     del report["tracking"], report["pushes"]
     text = format_report(report)
-    assert "The tick while walking" in text
+    assert "walking forward 0.5 m/s for 3 s and standing, in lockstep" in text
     assert "Speed tracking" not in text and "Pushes of" not in text
 
 
@@ -143,3 +145,7 @@ def test_a_short_walk_runs_timed_and_measured_as_the_benchmark_runs_it():
     standing = run_standing("truth", 0.2, clock=time.thread_time)
     assert standing["ticks_us"]["tick"]["samples"] == 200
     assert standing["ticks_us"]["estimator"]["median"] < 20  # the truth: nothing to estimate
+    turns = lockstep(WalkRun((0.5, 0.0, 0.0), 1.0).episode(), settle_s=0.3, walk_s=1.0,
+                     turn_ticks=50)
+    assert turns["turns"] >= 8 and turns["standing_us"]["tick"]["samples"] == 1000
+    assert 0.5 < turns["turn_ratios"]["tick"][1] < 20
