@@ -99,7 +99,7 @@ def test_cmd_vel_walks_and_stops_after_its_timeout(run):
     after_last_s, forward_m, speed, loaded, timeout_s = run["stream"]
     assert forward_m > 0.2  # 1.5 s at 0.3 m/s, less the start's first steps
     assert timeout_s <= after_last_s < timeout_s + 1.0
-    assert speed < 0.05 and loaded
+    assert speed < 0.1 and loaded  # the truth's residual sway once stopped
 
 
 def test_a_high_five_after_walking_succeeds(run):

@@ -164,11 +164,14 @@ class VelocityStream:
         self._stop_sequence = 0 if command is None else command.sequence
 
     def _start(self, command: VelocityCommand) -> None:
-        goal = self._make_goal(command)
+        send, make_goal = self._send, self._make_goal
+        if send is None or make_goal is None:  # not attached: commands start nothing
+            self._walking = False
+            return
+        goal = make_goal(command)
         with self._lock:
             self._claim = goal
-        future = self._send(goal)
-        future.add_done_callback(self._answered)
+        send(goal).add_done_callback(self._answered)
 
     def _answered(self, future: Future[ClientGoalHandle]) -> None:
         handle = future.result()
@@ -187,12 +190,10 @@ class VelocityStream:
         with self._lock:
             self._walking, self._claim = False, None
             latest = self._latest
-            again = (latest is not None and not latest.is_zero
-                     and latest.sequence > self._stop_sequence)
-            if again:
-                self._walking = True
-        if again:
-            self._start(latest)
+            if latest is None or latest.is_zero or latest.sequence <= self._stop_sequence:
+                return
+            self._walking = True
+        self._start(latest)
 
 
 def _check_timeout(timeout_s: Any) -> None:

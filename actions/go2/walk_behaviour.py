@@ -48,9 +48,11 @@ class WalkingMotion(Protocol):
     """What the behaviour uses of :class:`wbc.locomotion.Walking` (the walking motion)."""
 
     phase: Any
-    gait_phase: float
     distance_m: float
     measured_velocity: np.ndarray
+
+    @property
+    def gait_phase(self) -> float: ...
 
     def start(self, now_s: float) -> None: ...
 
@@ -122,8 +124,8 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
     def __init__(self, context: RobotContext, *,
                  make_walking: Callable[[BalanceController], WalkingMotion] | None = None):
         self.context = context
-        self._make_walking = make_walking or default_walking
-        self.walking: WalkingMotion | None = None
+        #: The walking motion this goal drives (made now, started once the robot stands).
+        self.walking: WalkingMotion = (make_walking or default_walking)(context.controller)
         self._stand: PostureTransition | None = None
         self._stream = False
         self._seen: VelocityCommand | None = None
@@ -145,7 +147,6 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         context = self.context
         self._stream = context.velocity_stream.claim(goal)
         context.walking = "the velocity stream (cmd_vel)" if self._stream else "a walk goal"
-        self.walking = self._make_walking(context.controller)
         if self._stream:
             self._seen = context.velocity_stream.latest()
             self._stamp_s = now_s
@@ -234,7 +235,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
             walking.set_velocity(goal.forward_mps, goal.lateral_mps, goal.yaw_rate_radps)
 
     def _request_stop(self, now_s: float) -> None:
-        if not self._stopping and self.walking is not None and self._walk_started:
+        if not self._stopping and self._walk_started:
             self._stop_s, self._stop_distance_m = now_s, self._distance()
             self.walking.request_stop(now_s)
 
@@ -321,8 +322,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         return feet if speed < REST_SPEED_MPS else f"{feet}, base still at {speed:.2f} m/s"
 
     def _distance(self) -> float:
-        return float(self.walking.distance_m) if self.walking is not None and (
-            self._walk_started) else 0.0
+        return float(self.walking.distance_m) if self._walk_started else 0.0
 
     def _end(self, phase: str, now_s: float, message: str, *,
              success: bool = False) -> StepResult[WalkResult, WalkFeedback]:
@@ -348,7 +348,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         if not self._throttle.due(now_s, phase) and not force:
             return None
         walking = self.walking
-        started = walking is not None and self._walk_started
+        started = self._walk_started
         velocity = walking.measured_velocity if started else np.zeros(3)
         return WalkFeedback(
             phase=phase, progress=float(self._progress),

@@ -69,13 +69,14 @@ class VelocityInputs:
             if command is not None:
                 self.topic_commands += 1
                 self._command(command, "rt/cmd_vel")
-        if self._remote is not None and now_s >= self._remote_due_s:
+        remote = self._remote
+        if remote is not None and now_s >= self._remote_due_s:
             self._remote_due_s = now_s + REMOTE_PERIOD_S
-            self._read_remote()
+            self._read_remote(remote)
 
-    def _read_remote(self) -> None:
+    def _read_remote(self, remote: Callable[[], bytes]) -> None:
         try:
-            state = RemoteState.decode(self._remote())
+            state = RemoteState.decode(remote())
         except ConfigurationError as err:
             self._refuse("the remote", str(err))
             return
