@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import socket
 from collections import Counter
 
@@ -14,6 +15,7 @@ import pytest
 from mcap.reader import make_reader
 
 from actions.robot.recording_process import (
+    CHILD_NICENESS,
     FRAME_BYTES,
     LINE_BYTES,
     PIPE_BYTES,
@@ -62,6 +64,9 @@ def test_the_child_writes_every_snapshot_and_line_in_order(tmp_path, standing):
                                  control_period_s=1e-3)
     assert (recording.decimation, recording.port) == (20, None)
     assert recording.queue_size == PIPE_BYTES // FRAME_BYTES
+    # Lower CPU priority than the loop's process (the recording is best effort).
+    assert os.getpriority(os.PRIO_PROCESS, recording._process.pid) == min(
+        19, os.getpriority(os.PRIO_PROCESS, 0) + CHILD_NICENESS)
     recording.line("first", 0.0)
     for k in range(40):
         if recording.due():

@@ -14,6 +14,7 @@ overshoot 0.16 to 0.48 ms without a writer, 0.6 to 1.2 ms with one at 50 Hz).
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import math
 import multiprocessing
@@ -42,6 +43,8 @@ START_TIMEOUT_S = 120.0
 CLOSE_TIMEOUT_S = 120.0
 #: Printed lines held in the parent while the pipe is full (beyond, the oldest is dropped).
 PENDING_LINES = 10_000
+#: The child's niceness added to the loop's (lower CPU priority; 19 is the lowest).
+CHILD_NICENESS = 10
 #: A printed line's longest text [bytes of UTF-8] (cut beyond), so that its frame stays
 #: within PIPE_BUF (4096 bytes): a larger non-blocking write may be cut by the kernel.
 LINE_BYTES = 3_500
@@ -323,6 +326,10 @@ def _serve(frames: Any, control: Any, options: dict[str, Any]) -> None:
     # Ctrl-C (the process group's SIGINT) is the parent's to handle: it brings the robot to
     # rest, then closes the pipe, and the end of the frames finishes the file here.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # The recording is best effort, the loop is not: on a busy machine the scheduler serves
+    # the loop's process first (the pipe holds 16 s of snapshots while this one waits).
+    with contextlib.suppress(OSError):
+        os.nice(CHILD_NICENESS)
     try:
         channels = RunChannels(mcap_path=options["mcap_path"], port=options["port"],
                                metadata=options["metadata"])
