@@ -19,7 +19,8 @@ def test_default_gait_is_a_trot_with_double_support():
     gait = GaitParameters()
     assert gait.name == "trot"
     assert gait.offsets == (0.0, 0.5, 0.5, 0.0)  # FL with RR, FR with RL
-    assert gait.stance_s == pytest.approx(0.3) and gait.swing_s == pytest.approx(0.2)
+    assert gait.duty_factor == 0.55
+    assert gait.stance_s == pytest.approx(0.275) and gait.swing_s == pytest.approx(0.225)
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
@@ -29,7 +30,7 @@ def test_default_gait_is_a_trot_with_double_support():
     ({"name": "walk", "duty_factor": 0.7},
      r"duty_factor: expected a value in \[0.75, 0.9\], received 0.7"),
     ({"swing_height_m": 0.5}, r"swing_height_m: expected a value in \[0.02, 0.2\], received 0.5"),
-    ({"transfer_s": 0.2}, r"transfer_s: expected at most half the stance time \(0.15 s"),
+    ({"transfer_s": 0.2}, r"transfer_s: expected at most half the stance time \(0.1375 s"),
     ({"period_s": "fast"}, r"period_s: expected a number, received 'fast'"),
 ])
 def test_gait_parameters_are_checked(kwargs, message):

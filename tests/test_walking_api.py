@@ -74,7 +74,7 @@ def test_trot_switches_diagonal_pairs_through_the_ramps(controller):
     # leave the ground, so each lands early, at half its swing; then FL and RR go.
     assert [s for _, s in seen] == [(), ("FR", "RL"), (), ("FL", "RR"), ()]
     assert seen[1][0] == pytest.approx(0.04, abs=3e-3)
-    assert seen[2][0] - seen[1][0] == pytest.approx(0.1, abs=3e-3)  # half of a 0.2 s swing
+    assert seen[2][0] - seen[1][0] == pytest.approx(0.1125, abs=3e-3)  # half the 0.225 s swing
     assert walking.phase is WalkPhase.WALKING
     assert 0.0 <= walking.gait_phase < 1.0
     walking.request_stop(end)
@@ -128,5 +128,5 @@ def test_late_touchdown_keeps_lowering_and_holds_the_clock(controller):
     assert len(late) == pytest.approx(150, abs=3)  # LATE_MAX_S at 1 kHz
     assert clocks[late[-1]] == pytest.approx(clocks[late[0]], abs=2e-3)  # the clock held
     assert states[late[-1] + 1] == "STANCE"
-    # It went late at the end of its swing, not before (0.04 s unloading, 0.2 s swing).
-    assert late[0] * controller.control_period_s == pytest.approx(0.24, abs=3e-3)
+    # It went late at the end of its swing, not before (0.04 s unloading, 0.225 s swing).
+    assert late[0] * controller.control_period_s == pytest.approx(0.265, abs=3e-3)

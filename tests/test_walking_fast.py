@@ -11,12 +11,12 @@ pytestmark = pytest.mark.slow
 
 @pytest.fixture(scope="module")
 def one_mps():
-    return run_walk([(0.0, (1.0, 0.0, 0.0))], 6.0, stop_at_s=5.0)
+    return run_walk([(0.0, (1.0, 0.0, 0.0))], 6.5, stop_at_s=5.0)
 
 
 @pytest.fixture(scope="module")
 def at_500_hz():
-    return run_walk([(0.0, (0.5, 0.0, 0.0))], 6.0, stop_at_s=5.0, control_period_s=2e-3)
+    return run_walk([(0.0, (0.5, 0.0, 0.0))], 6.5, stop_at_s=5.0, control_period_s=2e-3)
 
 
 def test_one_metre_per_second_without_falling(one_mps):

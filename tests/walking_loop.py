@@ -15,7 +15,7 @@ from sim.disturbances import Push, PushSchedule
 from sim.plant import Plant
 from tests.closed_loop import settle, tick
 from wbc import WholeBodyController
-from wbc.locomotion import GaitParameters, Walking, WalkPhase
+from wbc.locomotion import GaitParameters, VelocityLimits, Walking, WalkPhase
 
 #: A base this low [m] (standing: 0.335) has fallen.
 FALLEN_Z_M = 0.18
@@ -62,7 +62,7 @@ class WalkRun:
 def run_walk(commands: list[tuple[float, tuple[float, float, float]]], duration_s: float, *,
              stop_at_s: float | None = None, control_period_s: float = 1e-3,
              pushes: list[Push] = (), gait: GaitParameters | None = None,
-             plant: Plant | str = "menagerie") -> WalkRun:
+             plant: Plant | str = "menagerie", limits: VelocityLimits | None = None) -> WalkRun:
     """Stand 0.3 s, start walking, send each ``(time [s], (forward, lateral, yaw rate))`` at
     its time (since the walk's start), ask for a stop at ``stop_at_s``, run ``duration_s``
     (or until DONE after a stop). Pushes' times are since the walk's start too."""
@@ -74,7 +74,7 @@ def run_walk(commands: list[tuple[float, tuple[float, float, float]]], duration_
     loop.hooks.append(PushSchedule(loop.sim, [
         Push(at_s=p.at_s + t0, force_n=p.force_n, duration_s=p.duration_s,
              direction_deg=p.direction_deg, relative_to_heading=True) for p in pushes]))
-    walking = Walking(controller, gait=gait)
+    walking = Walking(controller, gait=gait, limits=limits)
     walking.start(t0)
     run = WalkRun(walking=walking, loop=loop)
     pending = sorted(commands)

@@ -38,7 +38,7 @@ class GaitParameters:
 
     name: str = "trot"
     period_s: float = 0.5
-    duty_factor: float = 0.6
+    duty_factor: float = 0.55
     swing_height_m: float = 0.08
     transfer_s: float = 0.04
     touchdown_press_m: float = 0.003

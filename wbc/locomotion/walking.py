@@ -17,6 +17,26 @@ from wbc.core.min_jerk import min_jerk
 from wbc.locomotion.foothold_planner import FootholdPlanner, yaw_rotation
 from wbc.locomotion.gait import GaitClock, GaitParameters, VelocityLimits
 from wbc.locomotion.swing_trajectory import swing_reference
+from wbc.locomotion.walking_tuning import (
+    COM_LEAD_M,
+    COM_WEIGHT,
+    HEIGHT_KI,
+    HEIGHT_TRIM_M,
+    LATE_MAX_S,
+    LATE_SPEED_MPS,
+    LINEAR_ACCEL,
+    NEAR_M,
+    SETTLE_S,
+    STOP_ACCEL,
+    STOP_SPEED_MPS,
+    STOP_STEPPING_S,
+    STOP_YAW_RATE,
+    STOPPED_MPS,
+    SWING_KD,
+    TOUCH_M,
+    VELOCITY_LEAD_RAD_S,
+    YAW_ACCEL,
+)
 from wbc.model.description import LEGS
 
 
@@ -36,36 +56,6 @@ class _Leg(enum.Enum):
     UNLOADING = 1  # on the ground, its bound ramping down to the lift-off
     SWING = 2      # on its path to the foothold
     LATE = 3       # past its touch-down time, still lowering
-
-
-#: A descending foot has landed when it is within TOUCH_M [m] of the ground it left from,
-#: or within NEAR_M and stopped (slower than STOPPED_MPS [m/s]: the ground holds it). A foot
-#: counted as landed while still moving down would make the estimator, which takes a stance
-#: foot as fixed, carry the base down with it (5 mm/s of height drift in a trot at 6 mm).
-TOUCH_M, NEAR_M, STOPPED_MPS = 0.002, 0.012, 0.05
-#: How fast a late foot keeps going down [m/s], and for how long at most [s].
-LATE_SPEED_MPS, LATE_MAX_S = 0.3, 0.15
-#: Accelerations [m/s^2, rad/s^2] at which the commanded velocity follows a new command.
-LINEAR_ACCEL, YAW_ACCEL = 2.0, 4.0
-#: Farthest the CoM reference runs ahead of the CoM [m]: it is dragged, never wound up.
-COM_LEAD_M = 0.06
-#: Weight of the CoM task while walking: ten times the standing default, so that the QP
-#: does not lift the body to help a swinging foot up (it did by 2-3 cm a step at 20).
-COM_WEIGHT = 200.0
-#: Swing joints' driver damping [N m s/rad] and the bound of the desired joint velocity's
-#: lead [rad/s] while walking (standing: 2 and 1): a 0.2 s swing moves the joints at up
-#: to 10 rad/s, where joint damping the model lacks (2 N m s/rad on the default plant) lags
-#: the foot 4 cm and the foot tasks lift the body to make up for it; with these the lag is
-#: 1.5 cm and the base holds its height.
-SWING_KD, VELOCITY_LEAD_RAD_S = 4.0, 4.0
-#: Rate [1/s] at which the CoM height target integrates the base height's error: the CoM
-#: task holds the whole body's CoM, and the legs' swings and the stance legs' compliance
-#: leave the base about 1 cm off its height without it.
-HEIGHT_KI, HEIGHT_TRIM_M = 2.0, 0.03
-#: Time [s] the CoM takes, once the feet are down after a stop, back over them.
-SETTLE_S = 0.3
-#: Stop stepping once slower than this [m/s] (or after STOP_STEPPING_S), then settle.
-STOP_SPEED_MPS, STOP_STEPPING_S = 0.12, 0.6
 
 
 class Walking:
@@ -237,7 +227,8 @@ class Walking:
         self.distance_m += math.hypot(velocity[0], velocity[1]) * dt
 
     def _follow_command(self, dt: float) -> None:
-        step = np.array([LINEAR_ACCEL, LINEAR_ACCEL, YAW_ACCEL]) * dt
+        linear = STOP_ACCEL if self.phase is WalkPhase.STOPPING else LINEAR_ACCEL
+        step = np.array([linear, linear, YAW_ACCEL]) * dt
         change = np.clip(self.target_velocity - self.commanded_velocity, -step, step)
         self.commanded_velocity += change
 
@@ -285,7 +276,7 @@ class Walking:
             return True
         slow = (not self.commanded_velocity.any()
                 and math.hypot(*self.measured_velocity[:2]) < STOP_SPEED_MPS
-                and abs(self.measured_velocity[2]) < 0.3)
+                and abs(self.measured_velocity[2]) < STOP_YAW_RATE)
         self._planted = slow or now_s - self._stop_s > STOP_STEPPING_S
         return not self._planted
 
