@@ -156,3 +156,32 @@ def test_teleop_in_a_pseudo_terminal_walks_the_simulated_go2_and_quits_standing(
           f"{bytes(output).split(b'stopped at')[1][:120]!r}")
     assert speeds and all(0.15 < speed < 0.45 for speed in speeds)
     assert b", standing; base at (+" in output  # walked forward, then stood
+
+
+def test_teleop_dds_publishes_rt_cmd_vel_and_says_who_reads_it():
+    from benchmarks.dds_processes import private_domain_id, wait_until
+    from sim.cli.teleop import DdsTarget
+    from wbc.robot_io.dds.cmd_vel_topic import CmdVelReader
+    from wbc.robot_io.dds.domain_config import join_domain
+
+    domain = private_domain_id(11)
+    target = DdsTarget(domain, "lo")
+    try:
+        assert target.stop() == (  # nobody reads yet
+            f"sent a stop, but no controller reads rt/cmd_vel (is 'go2-wbc run --dds' "
+            f"running on DDS domain {domain} (interface lo)?)")
+        dds = join_domain("lo", domain_id=domain)
+        reader = CmdVelReader(dds)
+        try:
+            wait_until(lambda: target.readers() or None, timeout_s=10.0,
+                       what="the reader to match")
+            target.send((0.3, -0.1, 0.4))
+            taken = wait_until(reader.take, timeout_s=10.0, what="the command")
+            assert taken == pytest.approx((0.3, -0.1, 0.4))
+            assert target.measured() is None  # no bridge publishes the truth here
+            assert target.stop() == "sent a stop; 1 controller(s) reading rt/cmd_vel"
+        finally:
+            reader.close()
+            dds.close()
+    finally:
+        target.close()

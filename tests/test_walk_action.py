@@ -384,3 +384,27 @@ def test_bad_commands_raise_naming_field_value_and_range(robot, args, kwargs, me
     with pytest.raises(ConfigurationError) as info:
         robot.context.velocity_stream.command(*args, **kwargs)
     assert str(info.value) == message
+
+
+def test_commands_from_another_thread_start_one_walk_and_the_last_one_steers(robot):
+    """The stream's thread safety: 2,000 commands from a thread while the runner ticks here;
+    one walk is started, and once the thread is done the newest command is the one used."""
+    import threading
+
+    stream = robot.context.velocity_stream
+    stream.command(0.1, 0.0, 0.0)
+    values = [round(0.1 + 0.0002 * k, 4) for k in range(2000)]
+
+    def sender() -> None:
+        for value in values:
+            stream.command(value, 0.0, 0.0, timeout_s=5.0)
+
+    thread = threading.Thread(target=sender)
+    thread.start()
+    while thread.is_alive():
+        robot.run(DT)
+    thread.join()
+    robot.run(2 * DT)
+    assert len(ScriptedWalking.made) == 1 and stream.walking
+    assert ScriptedWalking.made[0].calls[-1] == ("set_velocity", values[-1], 0.0, 0.0)
+    assert stream.received == 2001 and stream.refused == 0

@@ -225,9 +225,13 @@ class DdsTarget:
             self._measured = heading_velocity(record["q"], record["v"])
         return self._measured
 
+    def readers(self) -> int:
+        """How many controllers read ``rt/cmd_vel`` now."""
+        return self._writer.matched_readers()
+
     def stop(self) -> str:
         self._writer.publish(0.0, 0.0, 0.0)
-        readers = self._writer.matched_readers()
+        readers = self.readers()
         return (f"sent a stop; {readers} controller(s) reading rt/cmd_vel" if readers else
                 "sent a stop, but no controller reads rt/cmd_vel (is 'go2-wbc run --dds' "
                 f"running on {self._where}?)")
