@@ -97,12 +97,11 @@ class Walking:
         self.gait_time_s = 0.0
         self._legs = dict.fromkeys(LEGS, _Leg.STANCE)
         self._path = np.zeros((3, 3))
+        self._com_velocity = np.zeros(3)  # the CoM target's velocity [m/s], set every tick
         self._starts: dict[str, np.ndarray] = {}       # each swing's lift-off point [m]
         self._late_target: dict[str, np.ndarray] = {}  # a late foot's target [m]
         self._late_s: dict[str, float] = {}            # how long it has been late [s]
         self._foot_z: dict[str, float] = {}            # each foot's height last tick [m]
-
-    # ------------------------------------------------------------------ commands
 
     def set_velocity(self, forward_mps: float, lateral_mps: float,
                      yaw_rate_radps: float) -> None:
@@ -179,8 +178,6 @@ class Walking:
         self._stop_s = now_s
         self.phase = WalkPhase.STOPPING
 
-    # ------------------------------------------------------------------ read-outs
-
     @property
     def gait_phase(self) -> float:
         """Position in the gait cycle, ``[0, 1)``."""
@@ -190,8 +187,6 @@ class Walking:
     def swing_legs(self) -> tuple[str, ...]:
         """Legs in the air now."""
         return tuple(leg for leg in LEGS if self._legs[leg] in (_Leg.SWING, _Leg.LATE))
-
-    # ------------------------------------------------------------------ the tick
 
     def advance(self, now_s: float) -> WalkPhase:
         """Set the controller's references and contacts for time ``now_s`` [s]."""
@@ -218,42 +213,54 @@ class Walking:
         return math.atan2(r[1, 0], r[0, 0])
 
     def _measure(self, dt: float) -> None:
-        ctrl = self.controller
-        velocity = ctrl.kinematics.com_velocity
-        yaw = self._yaw()
-        heading = yaw_rotation(-yaw) @ velocity[:2]
-        omega = ctrl.kinematics.base_rotation @ ctrl.kinematics.v[3:6]
-        self.measured_velocity[:] = heading[0], heading[1], omega[2]
-        self.distance_m += math.hypot(velocity[0], velocity[1]) * dt
+        # Python floats in the tick's helpers: NumPy on 2- and 3-vectors costs more than the math.
+        kin = self.controller.kinematics
+        vx, vy = kin.com_velocity[0].item(), kin.com_velocity[1].item()
+        r, v = kin.base_rotation, kin.v
+        c, s = r[0, 0].item(), r[1, 0].item()
+        norm = math.hypot(c, s) or 1.0
+        c, s = c / norm, s / norm
+        omega = (r[2, 0] * v[3] + r[2, 1] * v[4] + r[2, 2] * v[5]).item()
+        self.measured_velocity[:] = (c * vx + s * vy, -s * vx + c * vy, omega)
+        self.distance_m += math.hypot(vx, vy) * dt
 
     def _follow_command(self, dt: float) -> None:
         linear = STOP_ACCEL if self.phase is WalkPhase.STOPPING else LINEAR_ACCEL
-        step = np.array([linear, linear, YAW_ACCEL]) * dt
-        change = np.clip(self.target_velocity - self.commanded_velocity, -step, step)
-        self.commanded_velocity += change
+        target, command = self.target_velocity, self.commanded_velocity
+        for k, limit in enumerate((linear * dt, linear * dt, YAW_ACCEL * dt)):
+            change = target[k].item() - command[k].item()
+            command[k] += min(max(change, -limit), limit)
 
     def _command_world(self) -> np.ndarray:
         """The commanded horizontal velocity (2,) [m/s] in the world frame."""
-        return yaw_rotation(self._yaw_ref) @ self.commanded_velocity[:2]
+        c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
+        vx, vy = self.commanded_velocity[0].item(), self.commanded_velocity[1].item()
+        return np.array((c * vx - s * vy, s * vx + c * vy))
 
     def _track_body(self, dt: float) -> None:
         """The CoM reference moves with the command, the heading turns with the yaw rate."""
         ctrl = self.controller
-        velocity = np.zeros(3)
-        velocity[:2] = self._command_world()
-        self._com_ref[:2] += velocity[:2] * dt
-        lead = self._com_ref[:2] - ctrl.kinematics.com_position[:2]
-        distance = math.hypot(lead[0], lead[1])
+        kin = ctrl.kinematics
+        c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
+        vx, vy = self.commanded_velocity[0].item(), self.commanded_velocity[1].item()
+        velocity = self._com_velocity
+        velocity[0], velocity[1] = c * vx - s * vy, s * vx + c * vy
+        ref = self._com_ref
+        x = ref[0].item() + velocity[0].item() * dt
+        y = ref[1].item() + velocity[1].item() * dt
+        lead_x, lead_y = x - kin.com_position[0].item(), y - kin.com_position[1].item()
+        distance = math.hypot(lead_x, lead_y)
         if distance > COM_LEAD_M:
-            self._com_ref[:2] -= lead * (1.0 - COM_LEAD_M / distance)
+            pull = 1.0 - COM_LEAD_M / distance
+            x, y = x - lead_x * pull, y - lead_y * pull
         ground = self._ground_now()
-        height = ctrl.kinematics.base_position[2] - ground
+        height = kin.base_position[2].item() - ground
         self._trim = min(max(self._trim + HEIGHT_KI * (self.base_height_m - height) * dt,
                              -HEIGHT_TRIM_M), HEIGHT_TRIM_M)
         # Above the stance feet: the estimate's height drifts, the legs' length does not.
-        self._com_ref[2] = ground + self._com_height + self._trim
-        ctrl.set_com_target(self._com_ref, velocity)
-        yaw_rate = self.commanded_velocity[2]
+        ref[:] = (x, y, ground + self._com_height + self._trim)
+        ctrl.set_com_target(ref, velocity)
+        yaw_rate = self.commanded_velocity[2].item()
         self._yaw_ref += yaw_rate * dt
         c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
         task = ctrl.base_task
@@ -261,11 +268,10 @@ class Walking:
         task.reference[1, :] = (0.0, 0.0, yaw_rate)
 
     def _ground_now(self) -> float:
-        """The ground's height [m] under the robot: the stance feet's mean, less the foot radius
-        is left in (every height here is of the foot sphere's centre)."""
-        feet = self.controller.kinematics.frame_position
-        rows = [i for i, leg in enumerate(LEGS) if self._legs[leg] is _Leg.STANCE]
-        return float(np.mean(feet[rows, 2])) if rows else float(np.mean(feet[:4, 2]))
+        """The ground's height [m]: the stance feet's (their spheres' centres) mean."""
+        heights = self.controller.kinematics.frame_position[:4, 2].tolist()
+        standing = [z for z, leg in zip(heights, LEGS) if self._legs[leg] is _Leg.STANCE]
+        return sum(standing) / len(standing) if standing else sum(heights) / 4.0
 
     def _stepping(self, now_s: float) -> bool:
         """Whether new steps start: always, until a stop has slowed the robot (or has
