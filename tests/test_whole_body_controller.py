@@ -326,13 +326,14 @@ def test_reset_prepares_the_raised_foot_layouts_without_changing_any_tick(model,
     lazy = WholeBodyController()
     lazy.prepared_supports = ()
     lazy.reset(standing)
-    assert len(prepared.builder._plans) == 5 and len(lazy.builder._plans) == 1
+    # Four feet, each three-foot set, the trot's two diagonal pairs.
+    assert len(prepared.builder._plans) == 7 and len(lazy.builder._plans) == 1
     assert prepared.builder.layout.loaded.tolist() == [0, 1, 2, 3]  # still on four feet
     for a, b in zip(*_lift_in_lockstep([prepared, lazy], model, standing)):
         assert a.ok and b.ok
         for field in ("tau", "q_des", "dq_des", "tau_ff", "qdd", "forces"):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
-    assert len(prepared.builder._plans) == 5  # the raise used a prepared layout
+    assert len(prepared.builder._plans) == 7  # the raise used a prepared layout
 
 
 def test_torque_limits_changed_after_reset_reach_every_prepared_layout(standing, model):
