@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, cast, runtime_checkable
 
 import numpy as np
 
@@ -172,12 +172,28 @@ class WalkingBehaviour(Protocol):
     walking: object | None
 
 
+#: Whether a type's instances conform to a protocol, by (type, protocol): an ``isinstance``
+#: against a runtime-checkable protocol costs about 10 us (Python 3.11), once a tick here.
+_CONFORMS: dict[tuple[type, type], bool] = {}
+
+
+def _conforms(value: object, protocol: type) -> bool:
+    """``isinstance(value, protocol)``, remembered per type of ``value`` (the protocols here
+    name attributes every instance of a class sets in its constructor)."""
+    key = (type(value), protocol)
+    known = _CONFORMS.get(key)
+    if known is None:
+        known = _CONFORMS[key] = isinstance(value, protocol)
+    return known
+
+
 def walking_motion(loop: RobotLoop) -> GaitSource | None:
     """The walking motion of the goal ``loop``'s actions run now (a Walk goal, or the
     ``cmd_vel`` stream's), ``None`` when nothing walks."""
     for record in loop.runner.active_goals()[:1]:  # the goal executing, if any
         behaviour = record.behaviour
-        if isinstance(behaviour, WalkingBehaviour) and isinstance(behaviour.walking,
-                                                                  GaitSource):
-            return behaviour.walking
+        if _conforms(behaviour, WalkingBehaviour):
+            motion = cast(WalkingBehaviour, behaviour).walking
+            if motion is not None and _conforms(motion, GaitSource):
+                return cast(GaitSource, motion)
     return None
