@@ -7,11 +7,13 @@ import contextlib
 import io
 import re
 import time
+import types
 from collections.abc import Callable
 
 import mujoco
 import pytest
 
+import sim.viewer
 from sim import episode_runner
 from sim.cli import EXIT_SUCCEEDED, main
 from sim.control_loop import ControlLoop
@@ -176,7 +178,8 @@ def test_without_an_overlay_the_hold_still_says_it_is_paused(loop):
 class ViewerRun:
     """``go2-wbc`` run in this process with a scripted window (no display needed): the
     hook's handle is a :class:`ScriptedHandle`; ``time.sleep`` (the pacing, the hold's
-    polls) only records its calls, with the sim time."""
+    polls) only records its calls, with the sim time, and the viewer's wall clock advances
+    only by those sleeps (so the pacing's sleeps do not depend on the machine's speed)."""
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch, **handle_options):
         self.handle: ScriptedHandle | None = None
@@ -188,6 +191,12 @@ class ViewerRun:
             self.hook = ViewerHook(sim, handle=self.handle, **options)
             return self.hook
 
+        wall_s = [0.0]
+
+        def viewer_sleep(seconds: float) -> None:
+            wall_s[0] += seconds
+            time.sleep(seconds)  # the recorder below, or a test's own
+
         def sleep(seconds: float) -> None:
             self.sleeps.append((self.hook.sim.time_s, seconds))
             if seconds == 0.1:  # the hold's poll (the pacing's never is exactly)
@@ -196,6 +205,9 @@ class ViewerRun:
         monkeypatch.setattr(episode_runner, "window_problem", lambda: "")
         monkeypatch.setattr(episode_runner, "ViewerHook", make_hook)
         monkeypatch.setattr(time, "sleep", sleep)
+        monkeypatch.setattr(sim.viewer, "time",
+                            types.SimpleNamespace(sleep=viewer_sleep,
+                                                  perf_counter=lambda: wall_s[0]))
 
     def __call__(self, *options: str) -> tuple[int, list[str]]:
         out = io.StringIO()
