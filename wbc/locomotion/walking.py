@@ -3,7 +3,6 @@ schedule, swing feet on smooth paths to footholds from the commanded and measure
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import replace
 
@@ -14,9 +13,12 @@ from wbc.controller.foot_reach import LEG_REACH_M
 from wbc.controller.whole_body_controller import WholeBodyController
 from wbc.core.errors import ConfigurationError
 from wbc.core.min_jerk import min_jerk
+from wbc.locomotion.command_envelope import HIP_ACCEL, CommandEnvelope
 from wbc.locomotion.foothold_planner import FootholdPlanner, yaw_rotation
 from wbc.locomotion.gait import GaitClock, GaitParameters, VelocityLimits
 from wbc.locomotion.swing_trajectory import swing_reference
+from wbc.locomotion.walk_phase import LegState as _Leg
+from wbc.locomotion.walk_phase import WalkPhase
 from wbc.locomotion.walking_tuning import (
     COM_LEAD_M,
     COM_WEIGHT,
@@ -38,24 +40,6 @@ from wbc.locomotion.walking_tuning import (
     YAW_ACCEL,
 )
 from wbc.model.description import LEGS
-
-
-class WalkPhase(enum.StrEnum):
-    """Phases of a walk, in order."""
-
-    STARTING = "starting"  # on four feet, the first pair unloading
-    WALKING = "walking"    # stepping
-    STOPPING = "stopping"  # zero velocity, the last steps, then four loaded feet
-    DONE = "done"          # standing on four loaded feet
-
-
-class _Leg(enum.Enum):
-    """What a leg does in the gait."""
-
-    STANCE = 0     # on the ground (reloading while its bound ramps up)
-    UNLOADING = 1  # on the ground, its bound ramping down to the lift-off
-    SWING = 2      # on its path to the foothold
-    LATE = 3       # past its touch-down time, still lowering
 
 
 class Walking:
@@ -139,6 +123,10 @@ class Walking:
         reach = math.sqrt(max(LEG_REACH_M ** 2 - (shoulder_height - ground) ** 2, 0.01))
         self.planner = FootholdPlanner(offsets, com_height_m=height,
                                        max_step_m=min(0.2, 0.8 * reach))
+        #: What the trot can follow: the command scaled to the legs' reach, hips' accelerations.
+        self.envelope = CommandEnvelope([offsets[leg] for leg in LEGS], stance_s=self.gait.stance_s,
+                                        max_step_m=self.planner.max_step_m,
+                                        turn_gain_s=0.5 * self.planner.feedback_gain)
         self._com_ref = com.copy()
         # Where the CoM stands over the feet (from their centroid, heading frame at _yaw0).
         self._home, self._yaw0 = com[:2] - feet[:, :2].mean(axis=0), yaw
@@ -225,11 +213,16 @@ class Walking:
         self.distance_m += math.hypot(vx, vy) * dt
 
     def _follow_command(self, dt: float) -> None:
-        linear = STOP_ACCEL if self.phase is WalkPhase.STOPPING else LINEAR_ACCEL
-        target, command = self.target_velocity, self.commanded_velocity
-        for k, limit in enumerate((linear * dt, linear * dt, YAW_ACCEL * dt)):
-            change = target[k].item() - command[k].item()
-            command[k] += min(max(change, -limit), limit)
+        stopping = self.phase is WalkPhase.STOPPING
+        linear = STOP_ACCEL if stopping else LINEAR_ACCEL
+        goal = self.envelope.scale(*self.target_velocity.tolist())
+        command = self.commanded_velocity
+        now = command.tolist()
+        change = [min(max(g - c, -limit), limit) for g, c, limit in
+                  zip(goal, now, (linear * dt, linear * dt, YAW_ACCEL * dt), strict=True)]
+        change = self.envelope.limit_change(*change, dt=dt,
+                                            accel_mps2=max(HIP_ACCEL, linear))
+        command[:] = [c + d for c, d in zip(now, change, strict=True)]
 
     def _command_world(self) -> np.ndarray:
         """The commanded horizontal velocity (2,) [m/s] in the world frame."""
