@@ -43,6 +43,7 @@ class FootholdPlanner:
                 point's) when ``None``.
         """
         self.offsets = {leg: np.array(o, dtype=float) for leg, o in offsets.items()}
+        self._offsets_xy = {leg: (float(o[0]), float(o[1])) for leg, o in self.offsets.items()}
         self.com_height_m = as_float("com_height_m", com_height_m, low=0.05,
                                      low_inclusive=False)
         self.max_step_m = as_float("max_step_m", max_step_m, low=0.0, low_inclusive=False)
@@ -68,13 +69,27 @@ class FootholdPlanner:
             time_to_touchdown_s: Time [s] left in the swing.
             stance_s: The stance that follows [s].
         """
-        com_td = com_xy + velocity_cmd * time_to_touchdown_s
-        hip = self.hip(leg, com_td, yaw_rad + yaw_rate_cmd * (time_to_touchdown_s
-                                                             + 0.5 * stance_s))
-        k = self.feedback_gain
-        cross = np.array([velocity[1] * yaw_rate_cmd, -velocity[0] * yaw_rate_cmd])
-        step = velocity_cmd * (0.5 * stance_s) + k * (velocity - velocity_cmd) + 0.5 * k * cross
-        length = math.hypot(step[0], step[1])
+        return np.array(self.foothold_xy(
+            leg, float(com_xy[0]), float(com_xy[1]), yaw_rad, float(velocity_cmd[0]),
+            float(velocity_cmd[1]), float(velocity[0]), float(velocity[1]), float(yaw_rate_cmd),
+            time_to_touchdown_s, stance_s))
+
+    def foothold_xy(self, leg: str, com_x: float, com_y: float, yaw_rad: float,
+                    cmd_x: float, cmd_y: float, vel_x: float, vel_y: float,
+                    yaw_rate_cmd: float, time_to_touchdown_s: float,
+                    stance_s: float) -> tuple[float, float]:
+        """:meth:`foothold` on Python floats (x, y) [m]: the walking tick's form, every tick of
+        every swing, where NumPy on 2-vectors costs more than the arithmetic."""
+        ox, oy = self._offsets_xy[leg]
+        yaw = yaw_rad + yaw_rate_cmd * (time_to_touchdown_s + 0.5 * stance_s)
+        c, s = math.cos(yaw), math.sin(yaw)
+        hip_x = com_x + cmd_x * time_to_touchdown_s + (c * ox - s * oy)
+        hip_y = com_y + cmd_y * time_to_touchdown_s + (s * ox + c * oy)
+        k, half = self.feedback_gain, 0.5 * stance_s
+        step_x = cmd_x * half + k * (vel_x - cmd_x) + 0.5 * k * (vel_y * yaw_rate_cmd)
+        step_y = cmd_y * half + k * (vel_y - cmd_y) + 0.5 * k * (-vel_x * yaw_rate_cmd)
+        length = math.hypot(step_x, step_y)
         if length > self.max_step_m:
-            step *= self.max_step_m / length
-        return hip + step
+            shrink = self.max_step_m / length
+            step_x, step_y = step_x * shrink, step_y * shrink
+        return hip_x + step_x, hip_y + step_y

@@ -28,22 +28,23 @@ def swing_reference(out: np.ndarray, start: np.ndarray, end: np.ndarray, *, heig
         duration_s: The swing's duration [s] (> 0).
     """
     tau = min(max(progress, 0.0), 1.0)
+    # Python floats: NumPy scalars' arithmetic costs more than the math (every tick of a swing).
+    sx, sy, sz = np.asarray(start, dtype=float).tolist()
+    ex, ey, ez = np.asarray(end, dtype=float).tolist()
     s, ds, dds = min_jerk(tau)
     rate, curvature = 1.0 / duration_s, 1.0 / (duration_s * duration_s)
-    for k in range(2):
-        delta = end[k] - start[k]
-        out[0, k] = start[k] + s * delta
-        out[1, k] = ds * rate * delta
-        out[2, k] = dds * curvature * delta
-    apex = max(start[2], end[2]) + height_m
+    dx, dy = ex - sx, ey - sy
+    out[0, 0], out[1, 0], out[2, 0] = sx + s * dx, ds * rate * dx, dds * curvature * dx
+    out[0, 1], out[1, 1], out[2, 1] = sy + s * dy, ds * rate * dy, dds * curvature * dy
+    apex = (sz if sz > ez else ez) + height_m
     # Each half lasts duration_s / 2: its time derivatives scale by 2 and 4.
     if tau < 0.5:
         s, ds, dds = min_jerk(2.0 * tau)
-        low = start[2]
+        low = sz
     else:
         s, ds, dds = min_jerk(2.0 - 2.0 * tau)  # from the end backwards: the descent
         ds = -ds
-        low = end[2]
+        low = ez
     delta = apex - low
     out[0, 2] = low + s * delta
     out[1, 2] = 2.0 * ds * rate * delta

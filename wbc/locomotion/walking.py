@@ -81,6 +81,12 @@ class Walking:
         self.gait_time_s = 0.0
         self._legs = dict.fromkeys(LEGS, _Leg.STANCE)
         self._path = np.zeros((3, 3))
+        self._path_rows = (self._path[0], self._path[1], self._path[2])  # views, set in place
+        self._lowering = np.array([0.0, 0.0, -LATE_SPEED_MPS])  # a late foot's velocity [m/s]
+        self._index = {leg: i for i, leg in enumerate(LEGS)}
+        self._offsets = dict(zip(LEGS, self.gait.offsets, strict=True))
+        #: The share of the cycle at which a stance leg's unloading may start.
+        self._window = self.gait.duty_factor - self.gait.transfer_s / self.gait.period_s
         self._com_velocity = np.zeros(3)  # the CoM target's velocity [m/s], set every tick
         self._starts: dict[str, np.ndarray] = {}       # each swing's lift-off point [m]
         self._late_target: dict[str, np.ndarray] = {}  # a late foot's target [m]
@@ -148,6 +154,7 @@ class Walking:
             reference_velocity_bound_rad_s=max(VELOCITY_LEAD_RAD_S,
                                                shaping.reference_velocity_bound_rad_s)))
         ctrl.com_task.set_weight(max(COM_WEIGHT, self._com_weight))
+        ctrl.base_task.rotation[:] = np.eye(3)  # level; each tick then sets its yaw block
         gait = self.gait
         # The first lift-off one transfer (and a tick) from now: the leg of offset 0.5 (FR
         # in a trot), or the first of the walk's sequence.
@@ -186,7 +193,7 @@ class Walking:
         if self.phase is WalkPhase.DONE:
             return self.phase
         self._follow_command(dt)
-        if not any(state is _Leg.LATE for state in self._legs.values()):
+        if _Leg.LATE not in self._legs.values():
             self.gait_time_s += dt
         self._track_body(dt)
         stepping = self._stepping(now_s)
@@ -203,45 +210,41 @@ class Walking:
     def _measure(self, dt: float) -> None:
         # Python floats in the tick's helpers: NumPy on 2- and 3-vectors costs more than the math.
         kin = self.controller.kinematics
-        vx, vy = kin.com_velocity[0].item(), kin.com_velocity[1].item()
-        r, v = kin.base_rotation, kin.v
-        c, s = r[0, 0].item(), r[1, 0].item()
+        vx, vy, _ = self._com_v = kin.com_velocity.tolist()
+        (c, _, _), (s, _, _), (r20, r21, r22) = kin.base_rotation.tolist()
+        self._yaw_now = math.atan2(s, c)
         norm = math.hypot(c, s) or 1.0
         c, s = c / norm, s / norm
-        omega = (r[2, 0] * v[3] + r[2, 1] * v[4] + r[2, 2] * v[5]).item()
+        w3, w4, w5 = kin.v[3:6].tolist()
+        omega = r20 * w3 + r21 * w4 + r22 * w5
         self.measured_velocity[:] = (c * vx + s * vy, -s * vx + c * vy, omega)
         self.distance_m += math.hypot(vx, vy) * dt
 
     def _follow_command(self, dt: float) -> None:
-        stopping = self.phase is WalkPhase.STOPPING
-        linear = STOP_ACCEL if stopping else LINEAR_ACCEL
         goal = self.envelope.scale(*self.target_velocity.tolist())
-        command = self.commanded_velocity
-        now = command.tolist()
+        now = self.commanded_velocity.tolist()
+        if goal[0] == now[0] and goal[1] == now[1] and goal[2] == now[2]:
+            return  # following it already (most ticks)
+        accel = STOP_ACCEL if self.phase is WalkPhase.STOPPING else LINEAR_ACCEL
         change = [min(max(g - c, -limit), limit) for g, c, limit in
-                  zip(goal, now, (linear * dt, linear * dt, YAW_ACCEL * dt), strict=True)]
-        change = self.envelope.limit_change(*change, dt=dt,
-                                            accel_mps2=max(HIP_ACCEL, linear))
-        command[:] = [c + d for c, d in zip(now, change, strict=True)]
-
-    def _command_world(self) -> np.ndarray:
-        """The commanded horizontal velocity (2,) [m/s] in the world frame."""
-        c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
-        vx, vy = self.commanded_velocity[0].item(), self.commanded_velocity[1].item()
-        return np.array((c * vx - s * vy, s * vx + c * vy))
+                  zip(goal, now, (accel * dt, accel * dt, YAW_ACCEL * dt), strict=True)]
+        change = self.envelope.limit_change(*change, dt=dt, accel_mps2=max(HIP_ACCEL, accel))
+        self.commanded_velocity[:] = [c + d for c, d in zip(now, change, strict=True)]
 
     def _track_body(self, dt: float) -> None:
         """The CoM reference moves with the command, the heading turns with the yaw rate."""
         ctrl = self.controller
         kin = ctrl.kinematics
         c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
-        vx, vy = self.commanded_velocity[0].item(), self.commanded_velocity[1].item()
+        vx, vy, yaw_rate = self._cmd = self.commanded_velocity.tolist()
         velocity = self._com_velocity
-        velocity[0], velocity[1] = c * vx - s * vy, s * vx + c * vy
+        wx, wy = c * vx - s * vy, s * vx + c * vy
+        velocity[0], velocity[1] = wx, wy
         ref = self._com_ref
-        x = ref[0].item() + velocity[0].item() * dt
-        y = ref[1].item() + velocity[1].item() * dt
-        lead_x, lead_y = x - kin.com_position[0].item(), y - kin.com_position[1].item()
+        rx, ry, _ = ref.tolist()
+        x, y = rx + wx * dt, ry + wy * dt
+        cx, cy, _ = self._com_p = kin.com_position.tolist()
+        lead_x, lead_y = x - cx, y - cy
         distance = math.hypot(lead_x, lead_y)
         if distance > COM_LEAD_M:
             pull = 1.0 - COM_LEAD_M / distance
@@ -253,12 +256,15 @@ class Walking:
         # Above the stance feet: the estimate's height drifts, the legs' length does not.
         ref[:] = (x, y, ground + self._com_height + self._trim)
         ctrl.set_com_target(ref, velocity)
-        yaw_rate = self.commanded_velocity[2].item()
         self._yaw_ref += yaw_rate * dt
         c, s = math.cos(self._yaw_ref), math.sin(self._yaw_ref)
+        # The command in the world at the new heading: what the footholds plan with.
+        self._cmd_world = (c * vx - s * vy, s * vx + c * vy)
         task = ctrl.base_task
-        task.rotation[:] = ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
-        task.reference[1, :] = (0.0, 0.0, yaw_rate)
+        rotation = task.rotation
+        rotation[0, 0], rotation[0, 1], rotation[1, 0], rotation[1, 1] = c, -s, s, c
+        reference = task.reference
+        reference[1, 0], reference[1, 1], reference[1, 2] = 0.0, 0.0, yaw_rate
 
     def _ground_now(self) -> float:
         """The ground's height [m]: the stance feet's (their spheres' centres) mean."""
@@ -283,10 +289,12 @@ class Walking:
         ctrl, gait = self.controller, self.gait
         schedule = ctrl.schedule
         state = self._legs[leg]
-        cycle, phase = self.clock.cycle(leg, self.gait_time_s)
+        # GaitClock.cycle, inline (every leg, every tick).
+        position = self.gait_time_s / gait.period_s - self._offsets[leg]
+        cycle = math.floor(position)
+        phase = position - cycle
         if state is _Leg.STANCE:
-            window = gait.duty_factor - gait.transfer_s / gait.period_s
-            if (stepping and window <= phase < gait.duty_factor
+            if (stepping and self._window <= phase < gait.duty_factor
                     and self._lifted[leg] != cycle and not schedule.is_ramping(leg)):
                 load = max(ctrl.normal_force(leg), schedule.min_normal_force_n)
                 start = min(load, schedule.max_normal_force(leg))
@@ -313,8 +321,7 @@ class Walking:
         else:  # LATE: keep going down until the foot meets the ground
             target = self._late_target[leg]
             target[2] -= LATE_SPEED_MPS * dt
-            ctrl.set_foot_target(leg, target, np.array([0.0, 0.0, -LATE_SPEED_MPS]),
-                                 clamp_to_reach=True)
+            ctrl.set_foot_target(leg, target, self._lowering, clamp_to_reach=True)
             self._late_s[leg] += dt
             if self._landed(leg) or self._late_s[leg] >= LATE_MAX_S:
                 self._touch_down(leg)
@@ -325,18 +332,14 @@ class Walking:
         progress = 1.0 if done else (phase - gait.duty_factor) / (1.0 - gait.duty_factor)
         if progress < 0.85:  # the foothold is fixed for the last part of the swing
             left = (1.0 - progress) * gait.swing_s
-            xy = self.planner.foothold(
-                leg, com_xy=ctrl.kinematics.com_position[:2], yaw_rad=self._yaw(),
-                velocity_cmd=self._command_world(),
-                velocity=ctrl.kinematics.com_velocity[:2].copy(),
-                yaw_rate_cmd=self.commanded_velocity[2], time_to_touchdown_s=left,
-                stance_s=gait.stance_s)
-            self.footholds[leg] = np.array([xy[0], xy[1],
-                                            self._ground[leg] - gait.touchdown_press_m])
+            (cx, cy, _), (vx, vy, _) = self._com_p, self._com_v
+            x, y = self.planner.foothold_xy(leg, cx, cy, self._yaw_now, *self._cmd_world, vx, vy,
+                                            self._cmd[2], left, gait.stance_s)
+            self.footholds[leg] = np.array((x, y, self._ground[leg] - gait.touchdown_press_m))
         path = swing_reference(self._path, self._starts[leg], self.footholds[leg],
                                height_m=gait.swing_height_m, progress=progress,
                                duration_s=gait.swing_s)
-        ctrl.set_foot_target(leg, path[0], path[1], path[2], clamp_to_reach=True)
+        ctrl.set_foot_target(leg, *self._path_rows, clamp_to_reach=True)
         if progress >= 0.5 and self._landed(leg):
             self._touch_down(leg)  # early, or on time
         elif done:
@@ -346,7 +349,7 @@ class Walking:
 
     def _landed(self, leg: str) -> bool:
         """The foot is down: on the ground it left from, or near it and stopped."""
-        z = float(self.controller.kinematics.frame_position[LEGS.index(leg), 2])
+        z = self.controller.kinematics.frame_position[self._index[leg], 2].item()
         previous, self._foot_z[leg] = self._foot_z.get(leg, z), z
         above = z - self._ground[leg]
         stopped = abs(z - previous) < STOPPED_MPS * self.controller.control_period_s
