@@ -19,8 +19,8 @@ def envelope() -> CommandEnvelope:
 
 
 def test_each_axis_alone_at_its_limit_is_not_scaled(envelope):
-    for command in [(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.4, 0.0), (0.0, 0.0, 1.2),
-                    (0.5, 0.0, 0.3)]:
+    for command in [(1.0, 0.0, 0.0), (0.0, 0.4, 0.0), (0.0, -0.4, 0.0), (0.0, 0.0, 1.2),
+                    (0.0, 0.0, -1.2), (0.5, 0.0, 0.3), (-0.5, 0.0, 0.0)]:
         assert envelope.scale(*command) == command
 
 
@@ -37,9 +37,11 @@ def test_a_combined_fast_command_is_scaled_as_a_whole_onto_the_largest_step(enve
     command = (-1.0, 0.26, 0.7)   # fell after 1 to 3 s before the envelope
     assert envelope.step(*command) > envelope.max_step_m
     scaled = envelope.scale(*command)
-    assert envelope.step(*scaled) == pytest.approx(envelope.max_step_m, abs=1e-6)
+    assert envelope.step(*scaled) == pytest.approx(envelope.longest_step(scaled[0]), abs=1e-6)
+    # Forward, the same command's mirror is scaled less: a longer step is allowed.
+    assert envelope.scale(1.0, 0.26, 0.7)[0] > -scaled[0]
     k = scaled[0] / command[0]
-    assert 0.8 < k < 0.85
+    assert 0.7 < k < 0.8
     assert scaled == pytest.approx(tuple(k * c for c in command))  # direction and curvature
     assert envelope.scale(*command) == scaled  # cached, the same
 
@@ -62,3 +64,17 @@ def test_bad_settings_are_refused_naming_the_field():
     with pytest.raises(ConfigurationError, match="step_share"):
         CommandEnvelope(OFFSETS, stance_s=0.3, max_step_m=0.2, turn_gain_s=0.09,
                         step_share=1.5)
+    with pytest.raises(ConfigurationError, match="backward_share"):
+        CommandEnvelope(OFFSETS, stance_s=0.3, max_step_m=0.2, turn_gain_s=0.09,
+                        backward_share=0.9)
+
+
+def test_backward_the_step_is_shorter(envelope):
+    assert envelope.longest_step(0.5) == envelope.max_step_m == pytest.approx(0.75 * 0.192)
+    assert envelope.longest_step(-0.5) == pytest.approx(0.70 * 0.192)
+    assert envelope.longest_step(-2.0) == pytest.approx(0.65 * 0.192)
+    # Backward 1.0 m/s straight: its 0.1375 m step scaled to where it fits.
+    backward = envelope.scale(-1.0, 0.0, 0.0)[0]
+    assert envelope.step(backward, 0.0, 0.0) == pytest.approx(
+        envelope.longest_step(backward), abs=1e-6)
+    assert -0.93 < backward < -0.91

@@ -10,11 +10,13 @@ from wbc.core.validation import as_float
 #: Share of the foothold's largest step from the hip (``FootholdPlanner.max_step_m``, 0.19 m
 #: on the GO2) that the command's half-stance travel may use: the hips at up to 1.05 m/s with
 #: the default 0.275 s stance, so 1.0 m/s straight (0.1375 m) is not scaled. The rest, 0.048 m,
-#: is for the capture-point feedback: 0.27 m/s of velocity error at its 0.18 s gain. Backward
-#: 1.0 m/s with 0.26 m/s sideways and 0.7 rad/s moves the outer hips at 1.18 m/s: it fell
-#: after 1 to 3 s before this envelope (stance legs stretched past their reach), scaled to
-#: 0.89 of it, it trots.
+#: is for the capture-point feedback: 0.27 m/s of velocity error at its 0.18 s gain.
 COMMAND_STEP_SHARE = 0.75
+#: The share walking backward at ``BACKWARD_FULL_MPS`` or faster (blended linearly from
+#: :data:`COMMAND_STEP_SHARE` at 0): the GO2's knees point backward, and backward 0.95 m/s
+#: with 0.25 m/s sideways and 0.25 rad/s had 19 QP failures in 4 s at 0.75 (its forward
+#: mirror none), none at 0.65; backward 1.0 m/s alone had 2.
+BACKWARD_STEP_SHARE, BACKWARD_FULL_MPS = 0.65, 1.0
 #: Largest acceleration [m/s^2] of any hip's commanded velocity: a reversal from 1 m/s
 #: forward to 1 m/s backward with a turn moved the outer hips' velocity at up to 3 m/s^2 under
 #: the per-axis ramps alone (2 m/s^2, 4 rad/s^2).
@@ -36,7 +38,7 @@ class CommandEnvelope:
 
     def __init__(self, offsets: list[tuple[float, float]], *, stance_s: float,
                  max_step_m: float, turn_gain_s: float, step_share: float = COMMAND_STEP_SHARE,
-                 hip_accel_mps2: float = HIP_ACCEL):
+                 backward_share: float = BACKWARD_STEP_SHARE, hip_accel_mps2: float = HIP_ACCEL):
         """Args:
             offsets: Each leg's nominal foot position (x, y) [m] from the centre of mass,
                 heading frame.
@@ -44,6 +46,7 @@ class CommandEnvelope:
             max_step_m: The foothold's largest step from the hip [m].
             turn_gain_s: The foothold's gain [s] on ``v x w`` (half the capture point's).
             step_share: Share of ``max_step_m`` the command's steps may use.
+            backward_share: The share walking backward at :data:`BACKWARD_FULL_MPS` or faster.
             hip_accel_mps2: Largest acceleration of a hip's commanded velocity [m/s^2].
         """
         self.offsets = [(float(x), float(y)) for x, y in offsets]
@@ -51,9 +54,12 @@ class CommandEnvelope:
         self.turn_gain_s = as_float("turn_gain_s", turn_gain_s, low=0.0)
         step_share = as_float("step_share", step_share, low=0.0, high=1.0,
                               low_inclusive=False)
-        #: The longest step [m] a command may plan from a hip.
+        backward_share = as_float("backward_share", backward_share, low=0.0, high=step_share,
+                                  low_inclusive=False)
+        #: The longest step [m] a command may plan from a hip (forward or sideways).
         self.max_step_m = step_share * as_float("max_step_m", max_step_m, low=0.0,
                                                 low_inclusive=False)
+        self._backward_loss_m = (step_share - backward_share) * max_step_m
         self.hip_accel_mps2 = as_float("hip_accel_mps2", hip_accel_mps2, low=0.0,
                                        low_inclusive=False)
         self._scaled: tuple[tuple[float, float, float], tuple[float, float, float]] = (
@@ -70,18 +76,23 @@ class CommandEnvelope:
         return max(math.hypot((vx - wz * y) * t + lean_x, (vy + wz * x) * t + lean_y)
                    for x, y in self.offsets)
 
+    def longest_step(self, vx: float) -> float:
+        """The longest step [m] allowed at a forward velocity ``vx`` [m/s]: shorter backward."""
+        return self.max_step_m - self._backward_loss_m * min(max(-vx / BACKWARD_FULL_MPS, 0.0),
+                                                             1.0)
+
     def scale(self, vx: float, vy: float, wz: float) -> tuple[float, float, float]:
-        """The command scaled (as a whole) so that every step fits :attr:`max_step_m`."""
+        """The command scaled (as a whole) so that every step fits :meth:`longest_step`."""
         command = (vx, vy, wz)
         if command == self._scaled[0]:  # the same command as last time (every tick)
             return self._scaled[1]
         scaled = command
-        if self.step(vx, vy, wz) > self.max_step_m:
+        if self.step(vx, vy, wz) > self.longest_step(vx):
             low, high = 0.0, 1.0  # bisection: the step grows with the scale (and its square)
             for _ in range(30):
                 mid = 0.5 * (low + high)
                 low, high = ((mid, high) if self.step(vx * mid, vy * mid, wz * mid)
-                             <= self.max_step_m else (low, mid))
+                             <= self.longest_step(vx * mid) else (low, mid))
             scaled = (vx * low, vy * low, wz * low)
         self._scaled = (command, scaled)
         return scaled
