@@ -226,9 +226,9 @@ class Walking:
         if goal[0] == now[0] and goal[1] == now[1] and goal[2] == now[2]:
             return  # following it already (most ticks)
         accel = STOP_ACCEL if self.phase is WalkPhase.STOPPING else LINEAR_ACCEL
-        change = [min(max(g - c, -limit), limit) for g, c, limit in
+        ramped = [min(max(g - c, -limit), limit) for g, c, limit in
                   zip(goal, now, (accel * dt, accel * dt, YAW_ACCEL * dt), strict=True)]
-        change = self.envelope.limit_change(*change, dt=dt, accel_mps2=max(HIP_ACCEL, accel))
+        change = self.envelope.limit_change(*ramped, dt=dt, accel_mps2=max(HIP_ACCEL, accel))
         self.commanded_velocity[:] = [c + d for c, d in zip(now, change, strict=True)]
 
     def _track_body(self, dt: float) -> None:
