@@ -54,10 +54,11 @@ def test_ten_random_commands_no_fall(random_walk):
     assert forward_mps == pytest.approx(0.83, rel=0.15)
 
 
-@pytest.fixture(scope="module")
-def identified_payload():
+@pytest.fixture(scope="module", params=[1e-3, 2e-3], ids=["1kHz", "500Hz"])
+def identified_payload(request):
     plant = Plant.preset("identified").with_params(calf_friction_loss=1.4, payload_kg=3.0)
-    return run_walk([(0.0, (0.5, 0.0, 0.0))], 5.0, plant=plant)
+    return run_walk([(0.0, (0.5, 0.0, 0.0))], 5.0, plant=plant,
+                    control_period_s=request.param)
 
 
 def test_identified_joints_with_3_kg_trot_at_half_a_metre_per_second(identified_payload):
