@@ -18,7 +18,7 @@ COMMAND_STEP_SHARE = 0.75
 #: mirror none), none at 0.65; backward 1.0 m/s alone had 2.
 BACKWARD_STEP_SHARE, BACKWARD_FULL_MPS = 0.65, 1.0
 #: Largest acceleration [m/s^2] of any hip's commanded velocity: a reversal from 1 m/s
-#: forward to 1 m/s backward with a turn moved the outer hips' velocity at up to 3 m/s^2 under
+#: forward to 1 m/s backward with a turn moved the outer hips' velocity at up to 2.8 m/s^2 under
 #: the per-axis ramps alone (2 m/s^2, 4 rad/s^2).
 HIP_ACCEL = 2.0
 
