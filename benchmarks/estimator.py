@@ -25,8 +25,6 @@ high five, one push and 10 s of standing.
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -34,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.reporting import json_safe, machine
+from benchmarks.reporting import machine, run_and_report
 from benchmarks.robustness import PlantCase, hold_push, run_high_five
 from sim.control_loop import ControlLoop
 from sim.episode import episode_default
@@ -203,15 +201,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, default=Path("out/estimator.json"),
                         help="where to write the report (default: out/estimator.json)")
     args = parser.parse_args(argv)
-    started = time.perf_counter()
-    report = run(quick=args.quick, log=lambda msg: print(
-        f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
-    report["benchmark_wall_s"] = round(time.perf_counter() - started, 1)
-    print(format_report(report))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False))
-    print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
-    return 0
+    return run_and_report(lambda log: run(quick=args.quick, log=log),
+                          format_report, args.json)
 
 
 if __name__ == "__main__":

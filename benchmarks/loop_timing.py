@@ -61,7 +61,7 @@ import numpy as np
 from actions.go2.go2_interfaces import HighFiveGoal, SitGoal, StandGoal
 from actions.ros_interfaces.control_msgs import FollowJointTrajectoryGoal
 from actions.ros_interfaces.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
-from benchmarks.reporting import json_safe, machine
+from benchmarks.reporting import machine, run_and_report
 from benchmarks.timed_ticks import TimedTicks
 from sim.episode import Episode, episode_default
 from sim.episode_loop import build_loop
@@ -294,15 +294,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         goal = HighFiveGoal(target_height=defaults["target_height"], hold_seconds=hold)
         print(json.dumps(fresh_process_ticks(goal)))
         return 0
-    started = time.perf_counter()
-    report = run(quick=args.quick, log=lambda msg: print(
-        f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
-    report["benchmark_wall_s"] = time.perf_counter() - started
-    print(format_report(report))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False))
-    print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
-    return 0
+    return run_and_report(lambda log: run(quick=args.quick, log=log),
+                          format_report, args.json)
 
 
 if __name__ == "__main__":

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import os
 import platform
-from collections.abc import Sequence
+import sys
+import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -54,3 +57,25 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, np.integer | np.bool_):
         return value.item()
     return value
+
+
+def run_and_report(run: Callable[[Callable[[str], None]], dict[str, Any]],
+                   format_report: Callable[[dict[str, Any]], str], json_path: Path) -> int:
+    """Run a benchmark, print its report and write it as JSON; the exit code (0).
+
+    Args:
+        run: The benchmark, given a log that prints each message on stderr with the seconds
+            since the start; returns its report.
+        format_report: The report as the text printed.
+        json_path: Where the report is written (its directory made if needed); the report
+            gains ``benchmark_wall_s``, the whole run's wall time [s].
+    """
+    started = time.perf_counter()
+    report = run(lambda msg: print(f"[{time.perf_counter() - started:6.1f} s] {msg}",
+                                   file=sys.stderr, flush=True))
+    report["benchmark_wall_s"] = round(time.perf_counter() - started, 1)
+    print(format_report(report))
+    json_path.parent.mkdir(parents=True, exist_ok=True)
+    json_path.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False))
+    print(f"\nWrote {json_path} in {report['benchmark_wall_s']:.1f} s")
+    return 0

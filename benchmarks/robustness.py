@@ -28,10 +28,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import multiprocessing
-import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -54,7 +52,7 @@ from benchmarks.plant_cases import (
     PlantCase,
     controller_parts,
 )
-from benchmarks.reporting import machine
+from benchmarks.reporting import machine, run_and_report
 from benchmarks.robustness_report import format_report
 from sim.control_loop import ControlLoop, TickHook
 from sim.disturbances import Push
@@ -381,15 +379,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.jobs is not None and args.jobs < 1:
         parser.error(f"--jobs: expected a whole number >= 1, received {args.jobs}")
-    started = time.perf_counter()
-    report = run(quick=args.quick, jobs=args.jobs, log=lambda msg: print(
-        f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
-    report["benchmark_wall_s"] = round(time.perf_counter() - started, 1)
-    print(format_report(report))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(report, indent=1, allow_nan=False))
-    print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
-    return 0
+    return run_and_report(lambda log: run(quick=args.quick, jobs=args.jobs, log=log),
+                          format_report, args.json)
 
 
 if __name__ == "__main__":

@@ -37,9 +37,7 @@ directions.
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -50,7 +48,7 @@ import numpy as np
 
 from actions.go2.go2_interfaces import WalkGoal
 from actions.go2.robot_context import STANDING_HEIGHT_M, TILT_LIMIT_DEG, tilt_deg
-from benchmarks.reporting import json_safe, machine
+from benchmarks.reporting import machine, run_and_report
 from benchmarks.robustness import FALLEN_HEIGHT_M
 from benchmarks.timed_ticks import TimedTicks, stats_us
 from benchmarks.walking_lockstep import lockstep
@@ -333,15 +331,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, default=Path("out/walking.json"),
                         help="where to write the report (default: out/walking.json)")
     args = parser.parse_args(argv)
-    started = time.perf_counter()
-    report = run(quick=args.quick, parts=args.only or PARTS, log=lambda msg: print(
-        f"[{time.perf_counter() - started:6.1f} s] {msg}", file=sys.stderr, flush=True))
-    report["benchmark_wall_s"] = time.perf_counter() - started
-    print(format_report(report))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False))
-    print(f"\nWrote {args.json} in {report['benchmark_wall_s']:.1f} s")
-    return 0
+    return run_and_report(lambda log: run(quick=args.quick, parts=args.only or PARTS, log=log),
+                          format_report, args.json)
 
 
 if __name__ == "__main__":
