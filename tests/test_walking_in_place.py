@@ -1,8 +1,7 @@
 """Closed loop in MuJoCo at 1 kHz on the default (realistic) plant and the estimate: trotting in
 place, then a stop on four loaded feet; measured on the simulator's truth.
 
-The issue asks for 60 s in place; this test trots 10 s (about 10 s of wall time on 2 cores)
-and docs/walking.md gives the 60 s figures measured with the same loop.
+The issue's 60 s in place (about 20 to 30 s of wall time on 2 cores).
 """
 
 import numpy as np
@@ -13,7 +12,7 @@ from wbc.locomotion import WalkPhase
 
 pytestmark = pytest.mark.slow
 
-TROT_S, STOP_AT_S = 10.0, 10.0
+TROT_S, STOP_AT_S = 60.0, 60.0
 
 
 @pytest.fixture(scope="module")
@@ -34,10 +33,10 @@ def test_trots_in_place_without_falling_or_failing(in_place):
 def test_base_height_held_within_1_cm(in_place):
     base = np.asarray(in_place.base)
     trot = in_place.window(1.0, TROT_S)
-    z0 = base[0, 2]
-    assert abs(base[trot, 2].mean() - z0) < 0.01
-    # The body bobs with the steps, less than 2 cm either way.
-    assert np.abs(base[trot, 2] - z0).max() < 0.02
+    z0 = base[0, 2]  # the standing height the walk starts from and holds
+    assert abs(base[trot, 2].mean() - z0) < 0.005
+    # Every tick of the minute, the steps' bobbing included.
+    assert np.abs(base[trot, 2] - z0).max() < 0.01
 
 
 def test_base_stays_within_10_cm_of_its_start(in_place):
