@@ -104,7 +104,9 @@ class WholeBodyController:
         self.recovery = QpRecovery(cfg.solver.backend, self.builder, motor=self.motor,
                                    torque_limits=self.balance.torque_limits,
                                    damping=cfg.shaping.fallback_damping)
-        #: Loaded-feet sets whose plans :meth:`reset` makes: all, each foot up, the diagonals.
+        #: The sets of loaded feet whose plans :meth:`reset` makes ready: all of them, each
+        #: foot raised, and a trot's diagonal pairs (a foot leaving or touching the ground
+        #: never waits for one).
         self.prepared_supports: tuple[tuple[str, ...], ...] = (
             legs, *(tuple(leg for leg in legs if leg != up) for up in legs),
             (legs[0], legs[3]), (legs[1], legs[2]))
