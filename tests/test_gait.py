@@ -47,12 +47,13 @@ def test_velocity_limits_name_the_field_value_and_range():
     limits = VelocityLimits(forward_mps=1.0, lateral_mps=0.4, yaw_rate_radps=1.2)
     assert limits.check(0.5, -0.4, 1) == (0.5, -0.4, 1.0)
     with pytest.raises(ConfigurationError,
-                       match=r"forward_mps: expected a value in \[-1, 1\], received 1.5"):
+                       match=r"forward_mps: expected a velocity in \[-1, 1\] m/s, received 1.5"):
         limits.check(1.5, 0.0, 0.0)
-    with pytest.raises(ConfigurationError,
-                       match=r"yaw_rate_radps: expected a value in \[-1.2, 1.2\], received -2"):
+    with pytest.raises(ConfigurationError, match=(
+            r"yaw_rate_radps: expected a velocity in \[-1.2, 1.2\] rad/s, received -2.0")):
         limits.check(0.0, 0.0, -2.0)
-    with pytest.raises(ConfigurationError, match="lateral_mps: expected a finite number"):
+    with pytest.raises(ConfigurationError, match=(
+            r"lateral_mps: expected a velocity in \[-0.4, 0.4\] m/s, received nan")):
         limits.check(0.0, math.nan, 0.0)
     with pytest.raises(ConfigurationError,
                        match=r"lateral_mps: expected a value in \[0, 1\], received -0.1"):

@@ -42,8 +42,8 @@ def test_checks_name_the_field(controller):
     walking = Walking(controller, limits=VelocityLimits(forward_mps=0.8))
     with pytest.raises(ConfigurationError, match="call start"):
         walking.advance(0.0)
-    with pytest.raises(ConfigurationError,
-                       match=r"forward_mps: expected a value in \[-0.8, 0.8\], received 0.9"):
+    with pytest.raises(ConfigurationError, match=(
+            r"forward_mps: expected a velocity in \[-0.8, 0.8\] m/s, received 0.9")):
         walking.set_velocity(0.9, 0.0, 0.0)
     assert not walking.target_velocity.any()  # nothing changed
     assert walking.phase is None

@@ -33,21 +33,6 @@ DEFAULT_TIMEOUT_S = 0.5
 MAX_TIMEOUT_S = 10.0
 
 
-def velocity_problem(limits: VelocityLimits, forward_mps: Any, lateral_mps: Any,
-                     yaw_rate_radps: Any) -> str:
-    """Why a velocity command is not valid ('' when it is): the field, the value received and
-    the valid range from ``limits`` (:class:`wbc.locomotion.gait.VelocityLimits`: each axis
-    both ways)."""
-    for name, value, limit, unit in (
-            ("forward_mps", forward_mps, limits.forward_mps, "m/s"),
-            ("lateral_mps", lateral_mps, limits.lateral_mps, "m/s"),
-            ("yaw_rate_radps", yaw_rate_radps, limits.yaw_rate_radps, "rad/s")):
-        if isinstance(value, bool) or not is_finite_real(value) or abs(value) > limit + 1e-12:
-            return (f"{name}: expected a velocity in [{-limit:g}, {limit:g}] {unit}, "
-                    f"received {value!r}")
-    return ""
-
-
 @dataclass(frozen=True)
 class VelocityCommand:
     """One streamed command.
@@ -119,7 +104,7 @@ class VelocityStream:
             ConfigurationError: A component beyond the limits or not finite, or a timeout
                 outside (0, 10] s: the message names the field, the value and the range.
         """
-        problem = velocity_problem(self.limits, forward_mps, lateral_mps, yaw_rate_radps)
+        problem = self.limits.problem(forward_mps, lateral_mps, yaw_rate_radps)
         if problem:
             raise ConfigurationError(f"velocity command: {problem}")
         timeout = self.timeout_s if timeout_s is None else timeout_s

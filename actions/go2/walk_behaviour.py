@@ -14,7 +14,7 @@ from actions.feedback_throttle import FeedbackThrottle
 from actions.go2.go2_interfaces import WalkFeedback, WalkGoal, WalkResult
 from actions.go2.high_five_behaviour import ROBOT_NOT_READY
 from actions.go2.robot_context import TILT_LIMIT_DEG, RobotContext
-from actions.go2.velocity_stream import VelocityCommand, velocity_problem
+from actions.go2.velocity_stream import VelocityCommand
 from actions.responses import GoalResponse, Rejection
 from wbc.controller.balance_controller import BalanceController
 from wbc.core.errors import WbcError
@@ -73,8 +73,8 @@ def default_walking(controller: BalanceController) -> WalkingMotion:
 def validate_walk_goal(context: RobotContext, goal: WalkGoal) -> GoalResponse | Rejection:
     """The goal callback: ACCEPT, or a coded rejection naming the field, the value received
     and what is valid."""
-    problem = velocity_problem(context.velocity_stream.limits, goal.forward_mps,
-                               goal.lateral_mps, goal.yaw_rate_radps)
+    problem = context.velocity_stream.limits.problem(goal.forward_mps, goal.lateral_mps,
+                                                     goal.yaw_rate_radps)
     if problem:
         return Rejection(INVALID_VELOCITY, problem)
     duration, distance = goal.duration_s, goal.distance_m

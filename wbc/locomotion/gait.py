@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from wbc.core.errors import ConfigurationError
-from wbc.core.validation import as_float, check_name
+from wbc.core.validation import as_float, check_name, is_finite_real
 from wbc.model.description import LEGS
 
 #: Each gait's phase offset of every leg, as a fraction of the cycle (``LEGS`` order).
@@ -94,20 +95,30 @@ class VelocityLimits:
         as_float("lateral_mps", self.lateral_mps, low=0.0, high=1.0)
         as_float("yaw_rate_radps", self.yaw_rate_radps, low=0.0, high=3.0)
 
+    def problem(self, forward_mps: Any, lateral_mps: Any, yaw_rate_radps: Any) -> str:
+        """Why a command is not valid ('' when it is): the first field beyond its limit or
+        not a finite number, the value received and the valid range with its unit."""
+        for name, value, limit, unit in (
+                ("forward_mps", forward_mps, self.forward_mps, "m/s"),
+                ("lateral_mps", lateral_mps, self.lateral_mps, "m/s"),
+                ("yaw_rate_radps", yaw_rate_radps, self.yaw_rate_radps, "rad/s")):
+            if isinstance(value, bool) or not is_finite_real(value) or abs(value) > limit + 1e-12:
+                return (f"{name}: expected a velocity in [{-limit:g}, {limit:g}] {unit}, "
+                        f"received {value!r}")
+        return ""
+
     def check(self, forward_mps: float, lateral_mps: float,
               yaw_rate_radps: float) -> tuple[float, float, float]:
         """The command as floats, each within its limit.
 
         Raises:
-            ConfigurationError: A value beyond its limit or not a number (the field, the
-                value and the valid range named).
+            ConfigurationError: A value beyond its limit or not a finite number (the field,
+                the value and the valid range named, as :meth:`problem` says it).
         """
-        return (as_float("forward_mps", forward_mps, low=-self.forward_mps,
-                         high=self.forward_mps),
-                as_float("lateral_mps", lateral_mps, low=-self.lateral_mps,
-                         high=self.lateral_mps),
-                as_float("yaw_rate_radps", yaw_rate_radps, low=-self.yaw_rate_radps,
-                         high=self.yaw_rate_radps))
+        problem = self.problem(forward_mps, lateral_mps, yaw_rate_radps)
+        if problem:
+            raise ConfigurationError(problem)
+        return float(forward_mps), float(lateral_mps), float(yaw_rate_radps)
 
 
 class GaitClock:
