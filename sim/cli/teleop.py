@@ -13,7 +13,6 @@ Keys: :mod:`sim.cli.teleop_keys`.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import select
 import sys
@@ -29,6 +28,7 @@ from sim.cli.arg_types import float_in
 from sim.cli.dds_options import add_dds_options
 from sim.cli.exit_codes import EXIT_SUCCEEDED, EXIT_USAGE
 from sim.cli.teleop_keys import KEYS_HELP, KeyTeleop
+from sim.gait_view import heading_velocities
 from sim.plant import DEFAULT_PLANT, PLANT_PRESETS
 
 #: Control rates [Hz] of the simulated robot.
@@ -135,18 +135,10 @@ def _status(command: tuple[float, float, float],
 
 
 def heading_velocity(q: np.ndarray, v: np.ndarray) -> tuple[float, float, float]:
-    """The base's velocity in its heading frame (x forward, y left, z up), from Pinocchio's
-    ``q`` (quaternion x, y, z, w at ``q[3:7]``) and ``v`` (base linear and angular velocity in
-    the base frame): forward and leftward [m/s], the yaw rate [rad/s]."""
-    x, y, z, w = (float(c) for c in q[3:7])
-    rotation = np.array([  # R_world_base
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-    linear, angular = rotation @ v[0:3], rotation @ v[3:6]
-    yaw = math.atan2(rotation[1, 0], rotation[0, 0])
-    c, s = math.cos(yaw), math.sin(yaw)
-    return (c * linear[0] + s * linear[1], -s * linear[0] + c * linear[1], float(angular[2]))
+    """Forward and leftward [m/s] and the yaw rate [rad/s] of the base in its heading frame
+    (:func:`sim.gait_view.heading_velocities` of one state), as the line prints them."""
+    forward, left, yaw_rate = heading_velocities(q, v).tolist()
+    return forward, left, yaw_rate
 
 
 class SimTarget:
