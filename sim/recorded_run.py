@@ -6,6 +6,7 @@ truncated or foreign file raises :class:`RecordingError` with one line naming th
 from __future__ import annotations
 
 import json
+import math
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,7 +43,8 @@ class RecordedRun:
     ``arrays``: ``t_s`` (n,), ``q`` (n, 19), ``v`` (n, 18) the controller's state, and when
     the run was simulated ``q_true``, ``v_true``, ``foot_target`` and ``foot_position`` (n, 3)
     of ``raised_leg``, ``contact_forces`` (n, 4, 3), ``com_margin_m``, ``tick_us``, ``phase``
-    (the shape :func:`sim.run_recorder.write_plot` reads).
+    (the shape :func:`sim.run_recorder.write_plot` reads); a walk's ``commanded_velocity``
+    (n, 3) (NaN where nothing walked), which makes that the walking plot.
     """
 
     path: Path
@@ -166,6 +168,10 @@ def _state_arrays(states: list[dict[str, Any]]) -> dict[str, np.ndarray]:
                       foot_position=column("foot_position")[:, k],
                       contact_forces=column("force_n"), com_margin_m=column("com_margin_m"),
                       raised_leg=np.array(leg))
+    commanded = [s.get("commanded_velocity") for s in states]
+    if any(c is not None for c in commanded):  # a walk: the walking plot's command
+        arrays["commanded_velocity"] = np.array(
+            [[math.nan] * 3 if c is None else c for c in commanded], dtype=float)
     return arrays
 
 

@@ -10,8 +10,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from actions.robot.run_recording import RunRecording, Snapshot
+from actions.robot.run_recording import RunRecording, Snapshot, WalkSample
 from actions.robot.tick_log import FootTargets
+from sim.gait_view import heading_velocities, walking_motion
 from wbc.model.description import LEGS
 from wbc.model.support_polygon import shrunk_signed_distance
 
@@ -23,7 +24,9 @@ if TYPE_CHECKING:
 class RecordingHook:
     """Every ``recording.decimation``-th tick: the controller's state and command, the
     simulator's true state, foot positions and contact forces, the CoM margin, the swing
-    feet's targets; then it logs what is queued (a simulated run has no deadline to keep).
+    feet's targets, and while a motion walks its commanded velocity beside the measured
+    ones (:class:`~actions.robot.run_recording.WalkSample`); then it logs what is queued (a
+    simulated run has no deadline to keep).
 
     Args:
         recording: Where the snapshots go.
@@ -63,12 +66,20 @@ class RecordingHook:
                 if target is not None:
                     targets[k] = target
         estimate = None if loop.estimator is None else loop.estimator.estimate
+        q, v = np.array(loop.context.q), np.array(loop.context.v)
+        walking, walk = walking_motion(loop), None
+        if walking is not None:
+            walk = WalkSample(
+                commanded=np.array(walking.commanded_velocity), measured=heading_velocities(q, v),
+                measured_true=heading_velocities(truth[0], truth[1]),
+                swing_legs=tuple(walking.swing_legs),
+                loaded=tuple(bool(f > LOADED_FORCE_N) for f in forces[:, 2]))
         recording.capture(Snapshot(
-            t_s=loop.context.now_s, q=np.array(loop.context.q), v=np.array(loop.context.v),
+            t_s=loop.context.now_s, q=q, v=v,
             tau=np.array(out.tau), foot_target=targets, stance=stance,
             tick_us=out.timings.get("total", math.nan) * 1e6, qp_ok=bool(out.ok),
             status=out.status.name, phase=self.phase_of(),
             estimate_contact=None if estimate is None else np.array(estimate.contact),
             q_true=np.array(truth[0]), v_true=np.array(truth[1]), force_n=forces,
-            foot_position=feet, com_margin_m=margin, raised_leg=self.leg))
+            foot_position=feet, com_margin_m=margin, raised_leg=self.leg, walk=walk))
         recording.drain()

@@ -4,10 +4,12 @@ WebSocket: :class:`RunChannels`, the one home of ``foxglove-sdk``.
 Typed channels (Foxglove's own schemas, protobuf on the wire): ``/tf`` (FrameTransforms),
 ``/joint_states`` (JointStates), ``/markers`` (SceneUpdate), ``/log`` (Log). JSON channels,
 each with a JSON schema: ``/plot``, ``/contacts``, ``/controller/timing``,
-``/action/feedback``, ``/wbc/state`` (the raw arrays a replay reads back) and
-``/robot_description`` (the URDF, schema ``std_msgs/msg/String`` as the 3D panel's URDF layer
-expects, its meshes as ``file://`` URIs on this machine). The MCAP file also holds the URDF as
-an attachment and the run's description as metadata.
+``/action/feedback``, ``/wbc/state`` (the raw arrays a replay reads back), ``/walking``
+(while a motion walks: commanded and measured velocity in the heading frame, the swing and
+loaded feet; the channel exists from its first message) and ``/robot_description`` (the
+URDF, schema ``std_msgs/msg/String`` as the 3D panel's URDF layer expects, its meshes as
+``file://`` URIs on this machine). The MCAP file also holds the URDF as an attachment and the
+run's description as metadata.
 """
 
 from __future__ import annotations
@@ -38,6 +40,8 @@ CHUNK_BYTES = 64 * 1024
 DESCRIPTION_SCHEMA = "std_msgs/msg/String"
 _NUMBER = {"type": "number"}
 _NUMBERS = {"type": "array", "items": _NUMBER}
+WALKING_VELOCITY = ("forward, lateral [m/s], yaw rate [rad/s] in the heading frame; null "
+                    "while nothing walks")
 #: JSON channel -> (schema name, properties).
 JSON_CHANNELS: dict[str, tuple[str, dict[str, Any]]] = {
     "/plot": ("go2_wbc.Plot", {
@@ -58,8 +62,18 @@ JSON_CHANNELS: dict[str, tuple[str, dict[str, Any]]] = {
         "t_s": _NUMBER, "q": _NUMBERS, "v": _NUMBERS, "tau": _NUMBERS, "q_true": _NUMBERS,
         "v_true": _NUMBERS, "foot_target": {"type": "array", "items": _NUMBERS},
         "foot_position": {"type": "array", "items": _NUMBERS}, "phase": {"type": "string"},
-        "tick_us": _NUMBER, "qp_ok": {"type": "boolean"}}),
+        "tick_us": _NUMBER, "qp_ok": {"type": "boolean"},
+        "commanded_velocity": {**_NUMBERS, "description": WALKING_VELOCITY}}),
 }
+#: A heading-frame velocity's fields on ``/walking``.
+_VELOCITY = {"type": "object", "properties": {
+    "forward_mps": _NUMBER, "lateral_mps": _NUMBER, "yaw_rate_radps": _NUMBER}}
+#: ``/walking``: created at its first message (a run that never walks has no such channel).
+WALKING_CHANNEL = ("/walking", "go2_wbc.Walking", {
+    "commanded": _VELOCITY, "measured": _VELOCITY, "measured_true": _VELOCITY,
+    "swing_legs": {"type": "array", "items": {"type": "string"}},
+    "legs": {"type": "array", "items": {"type": "string"}},
+    "loaded": {"type": "array", "items": {"type": "boolean"}}})
 
 
 def _json_schema(name: str, properties: dict[str, Any]) -> foxglove.Schema:
@@ -110,6 +124,7 @@ class RunChannels:
             "/robot_description", message_encoding="json", context=context,
             schema=_json_schema(DESCRIPTION_SCHEMA, {"data": {"type": "string"}}))
         self.urdf_text = description_text(self.description)
+        self.walking: foxglove.Channel | None = None
         self.writer: Any = None
         self.server: Any = None
         self._port: int | None = None
@@ -146,6 +161,15 @@ class RunChannels:
     def log_json(self, topic: str, message: dict[str, Any], time_ns: int) -> None:
         """Log ``message`` on the JSON channel ``topic`` (one of :data:`JSON_CHANNELS`)."""
         self.json[topic].log(message, log_time=time_ns)
+
+    def log_walking(self, message: dict[str, Any], time_ns: int) -> None:
+        """Log ``message`` on ``/walking`` (:data:`WALKING_CHANNEL`), the channel created at
+        the first one."""
+        if self.walking is None:
+            topic, name, properties = WALKING_CHANNEL
+            self.walking = foxglove.Channel(topic, schema=_json_schema(name, properties),
+                                            message_encoding="json", context=self.context)
+        self.walking.log(message, log_time=time_ns)
 
     def log_description(self, time_ns: int) -> None:
         """The URDF on ``/robot_description`` (repeated: a live view may join late)."""

@@ -61,6 +61,25 @@ _NEWTONS_PER_M = 200.0  # a force arrow's length: 1 m per 200 N
 
 
 @dataclass(slots=True)
+class WalkSample:
+    """What a walking motion adds to a snapshot (``/walking``), velocities in the base's
+    heading frame: forward, lateral [m/s] and the yaw rate [rad/s], counter-clockwise.
+
+    ``commanded`` (3,) the motion's commanded velocity (the command after its ramps and
+    envelope: what the trot follows), ``measured`` (3,) the controller's state's (the
+    estimate), ``measured_true`` (3,) the simulator's truth (``None`` on a real robot);
+    ``swing_legs`` the legs the gait has in the air; ``loaded`` per leg (``LEGS`` order)
+    whether the simulator finds it loaded (``None`` on a real robot).
+    """
+
+    commanded: np.ndarray
+    measured: np.ndarray
+    measured_true: np.ndarray | None = None
+    swing_legs: tuple[str, ...] = ()
+    loaded: tuple[bool, ...] | None = None
+
+
+@dataclass(slots=True)
 class Snapshot:
     """One tick as recorded: the controller's state and command, and what the robot's side
     knows (the simulator's truth and measured feet; ``None`` on a real robot).
@@ -68,7 +87,8 @@ class Snapshot:
     Arrays are copies, in the description's conventions: ``q`` (19,) Pinocchio's
     ``(x, y, z, qx, qy, qz, qw, joints)`` [m, rad], ``v`` (18,) [m/s, rad/s], ``tau`` (12,)
     [N m], ``foot_target`` (4, 3) world [m] (NaN: none), ``force_n`` (4, 3) [N] world,
-    ``foot_position`` (4, 3) world [m].
+    ``foot_position`` (4, 3) world [m]; ``walk`` what a walking motion adds (``None``
+    while nothing walks).
     """
 
     t_s: float
@@ -90,6 +110,7 @@ class Snapshot:
     raised_leg: str = ""
     missed: bool = False
     stages_us: dict[str, float] = field(default_factory=dict)
+    walk: WalkSample | None = None
 
 
 def _finite(x: float) -> float | None:
@@ -108,6 +129,14 @@ def _array(a: np.ndarray | None) -> list | None:
     cells = a.astype(object)
     cells[~finite] = None
     return cells.tolist()
+
+
+def _velocity(v: np.ndarray | None) -> dict[str, float] | None:
+    """A heading-frame velocity (3,) as ``/walking``'s named fields."""
+    if v is None:
+        return None
+    forward, lateral, yaw_rate = (float(x) for x in v)
+    return {"forward_mps": forward, "lateral_mps": lateral, "yaw_rate_radps": yaw_rate}
 
 
 def _arrow_rotation(direction: np.ndarray) -> Quaternion:
@@ -285,7 +314,8 @@ class RunRecording:
             lines=lines)])
 
     def _log_plots(self, s: Snapshot) -> None:
-        """``/plot``, ``/contacts``, ``/controller/timing``."""
+        """``/plot``, ``/contacts``, ``/controller/timing``, and ``/walking`` while a motion
+        walks."""
         ns = round(s.t_s * 1e9)
         ch = self.channels
         foot_error = math.nan
@@ -305,6 +335,13 @@ class RunRecording:
         ch.log_json("/controller/timing", {
             "tick_us": _finite(s.tick_us), "qp_ok": s.qp_ok, "status": s.status,
             "missed": s.missed, "stages_us": s.stages_us, "dropped": self.dropped}, ns)
+        if s.walk is not None:
+            w = s.walk
+            ch.log_walking({
+                "commanded": _velocity(w.commanded), "measured": _velocity(w.measured),
+                "measured_true": _velocity(w.measured_true), "swing_legs": list(w.swing_legs),
+                "legs": list(LEGS), "loaded": None if w.loaded is None else list(w.loaded)},
+                ns)
 
     def _log_state(self, s: Snapshot) -> None:
         """``/wbc/state``: the arrays a replay reads back."""
@@ -315,7 +352,8 @@ class RunRecording:
             "foot_target": _array(s.foot_target), "foot_position": _array(s.foot_position),
             "force_n": _array(s.force_n), "com_margin_m": _finite(s.com_margin_m),
             "phase": s.phase, "raised_leg": s.raised_leg, "tick_us": _finite(s.tick_us),
-            "qp_ok": s.qp_ok}, ns)
+            "qp_ok": s.qp_ok,
+            "commanded_velocity": None if s.walk is None else _array(s.walk.commanded)}, ns)
 
 
 def _stamp(ns: int) -> Timestamp:
