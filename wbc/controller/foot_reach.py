@@ -57,6 +57,12 @@ class FootReach:
             for leg in self.legs
         }
 
+    def shoulder_in_base(self, leg: str) -> np.ndarray:
+        """A leg's shoulder (3,) [m] in the base frame (a copy): for compiled code that
+        checks a leg's reach itself."""
+        check_name("leg", leg, self.legs)
+        return self._shoulder_in_base[leg].copy()
+
     def shoulder_position(self, leg: str, placement: Placement) -> np.ndarray:
         """World position [m] of a leg's shoulder for the base's ``placement``.
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from wbc.core.validation import as_float
@@ -16,6 +17,29 @@ def yaw_rotation(yaw_rad: float) -> np.ndarray:
     """The (2, 2) rotation of the horizontal plane by ``yaw_rad`` [rad]."""
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     return np.array([[c, -s], [s, c]])
+
+
+@numba.njit("UniTuple(f8, 2)(f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8)",
+            cache=True)
+def foothold_point(offset_x: float, offset_y: float, gain_s: float, max_step_m: float,
+                   com_x: float, com_y: float, yaw_rad: float, cmd_x: float, cmd_y: float,
+                   vel_x: float, vel_y: float, yaw_rate_cmd: float, time_to_touchdown_s: float,
+                   stance_s: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """:meth:`FootholdPlanner.foothold_xy` for a leg's nominal offset (x, y) [m], the
+    feedback gain [s] and the largest step [m]: the rule's one implementation, which the
+    walking tick's compiled kernel calls too."""
+    yaw = yaw_rad + yaw_rate_cmd * (time_to_touchdown_s + 0.5 * stance_s)
+    c, s = math.cos(yaw), math.sin(yaw)
+    hip_x = com_x + cmd_x * time_to_touchdown_s + (c * offset_x - s * offset_y)
+    hip_y = com_y + cmd_y * time_to_touchdown_s + (s * offset_x + c * offset_y)
+    k, half = gain_s, 0.5 * stance_s
+    step_x = cmd_x * half + k * (vel_x - cmd_x) + 0.5 * k * (vel_y * yaw_rate_cmd)
+    step_y = cmd_y * half + k * (vel_y - cmd_y) + 0.5 * k * (-vel_x * yaw_rate_cmd)
+    length = math.hypot(step_x, step_y)
+    if length > max_step_m:
+        shrink = max_step_m / length
+        step_x, step_y = step_x * shrink, step_y * shrink
+    return hip_x + step_x, hip_y + step_y
 
 
 class FootholdPlanner:
@@ -78,18 +102,8 @@ class FootholdPlanner:
                     cmd_x: float, cmd_y: float, vel_x: float, vel_y: float,
                     yaw_rate_cmd: float, time_to_touchdown_s: float,
                     stance_s: float) -> tuple[float, float]:
-        """:meth:`foothold` on Python floats (x, y) [m]: the walking tick's form, every tick of
-        every swing, where NumPy on 2-vectors costs more than the arithmetic."""
+        """:meth:`foothold` on floats (x, y) [m] (:func:`foothold_point`, compiled)."""
         ox, oy = self._offsets_xy[leg]
-        yaw = yaw_rad + yaw_rate_cmd * (time_to_touchdown_s + 0.5 * stance_s)
-        c, s = math.cos(yaw), math.sin(yaw)
-        hip_x = com_x + cmd_x * time_to_touchdown_s + (c * ox - s * oy)
-        hip_y = com_y + cmd_y * time_to_touchdown_s + (s * ox + c * oy)
-        k, half = self.feedback_gain, 0.5 * stance_s
-        step_x = cmd_x * half + k * (vel_x - cmd_x) + 0.5 * k * (vel_y * yaw_rate_cmd)
-        step_y = cmd_y * half + k * (vel_y - cmd_y) + 0.5 * k * (-vel_x * yaw_rate_cmd)
-        length = math.hypot(step_x, step_y)
-        if length > self.max_step_m:
-            shrink = self.max_step_m / length
-            step_x, step_y = step_x * shrink, step_y * shrink
-        return hip_x + step_x, hip_y + step_y
+        return foothold_point(ox, oy, self.feedback_gain, self.max_step_m, com_x, com_y,
+                              yaw_rad, cmd_x, cmd_y, vel_x, vel_y, yaw_rate_cmd,
+                              time_to_touchdown_s, stance_s)
