@@ -20,22 +20,29 @@ PUBLISH_S, SPEED_MPS = 2.0, 0.3
 
 
 class TwistPublisher:
-    """A ``/cmd_vel`` publisher in this process (its own ROS context), as a teleop would."""
+    """A ``/cmd_vel`` publisher in this process (its own ROS context), as a teleop would.
 
-    def __init__(self) -> None:
+    Args:
+        domain_id: The ROS 2 domain (default: ``ROS_DOMAIN_ID``'s).
+        qos: The publisher's QoS (default: depth 10, Reliable, as ``teleop_twist_keyboard``).
+    """
+
+    def __init__(self, *, domain_id: int | None = None, qos: object = 10) -> None:
         import rclpy
         from geometry_msgs.msg import Twist
         from rclpy.node import Node
 
         self.context = rclpy.context.Context()
-        rclpy.init(context=self.context)
+        rclpy.init(context=self.context, domain_id=domain_id)
         self.node = Node("go2_wbc_test_teleop", context=self.context)
-        self.publisher = self.node.create_publisher(Twist, "/cmd_vel", 10)
+        self.publisher = self.node.create_publisher(Twist, "/cmd_vel", qos)
         self.twist = Twist
 
-    def publish(self, forward_mps: float) -> None:
+    def publish(self, forward_mps: float, lateral_mps: float = 0.0,
+                yaw_rate_radps: float = 0.0) -> None:
         message = self.twist()
-        message.linear.x = forward_mps
+        message.linear.x, message.linear.y = forward_mps, lateral_mps
+        message.angular.z = yaw_rate_radps
         self.publisher.publish(message)
 
     def close(self) -> None:
