@@ -35,6 +35,9 @@ ROBOT_WALKING = 33
 MIN_WALKING_HEIGHT_M = 0.18
 #: Longest stop [s] (from the request to four loaded feet) before the goal ends ABORTED.
 MAX_STOP_S = 2.0
+#: The cosine of the tilt limit, a hair inside it: a base tilted less (its vertical axis'
+#: z component above it) is level enough without computing its angle.
+_LEVEL_COS = math.cos(math.radians(TILT_LIMIT_DEG)) + 1e-9
 #: Consecutive damping fallbacks [ticks] after which the goal ends at once.
 FAULT_LIMIT_TICKS = 50
 #: After the last step the goal ends once the base is slower than ``REST_SPEED_MPS`` [m/s]
@@ -132,6 +135,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         self._stamp_s = 0.0  # robot time [s] the newest stream command was first seen
         self._walk_start_s = math.nan
         self._stop_s = math.nan
+        self._stopping = False  # a stop was requested (at _stop_s)
         self._stop_distance_m = 0.0  # the path [m] walked when the stop was asked
         self._done_s = math.nan  # robot time [s] the walking motion was done
         self._stop_why = ""  # why the walk stops: its aim reached, the stream's stop
@@ -139,6 +143,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         self._abort_reason = ""
         self._progress = 0.0
         self._throttle = FeedbackThrottle()
+        self._names: dict[Any, str] = {}  # the walking motion's phases by their names
 
     # -- the behaviour's interface ----------------------------------------------------------
 
@@ -189,7 +194,9 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
             else:
                 self._check_aim(now_s)
         phase = walking.advance(now_s)
-        name = str(getattr(phase, "name", phase)).lower()
+        name = self._names.get(phase)
+        if name is None:  # a phase not seen yet (a few per walk): its name, once
+            name = self._names[phase] = str(getattr(phase, "name", phase)).lower()
         if name != "done":
             if self._stopping and now_s - self._stop_s > MAX_STOP_S:
                 return self._end("aborted", now_s, (
@@ -217,10 +224,6 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     # -- the walk ---------------------------------------------------------------------------
 
-    @property
-    def _stopping(self) -> bool:
-        return not math.isnan(self._stop_s)
-
     def _begin(self, now_s: float) -> None:
         """Start walking at the goal's (or the stream's) velocity."""
         walking = self.walking
@@ -237,6 +240,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
     def _request_stop(self, now_s: float) -> None:
         if not self._stopping and self._walk_started:
             self._stop_s, self._stop_distance_m = now_s, self._distance()
+            self._stopping = True
             self.walking.request_stop(now_s)
 
     @property
@@ -283,6 +287,10 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     def _balance_problem(self) -> str:
         """Why the walk must stop ('' when it need not): a tilt or a sinking base."""
+        q = self.context.q
+        x, y = q.item(3), q.item(4)
+        if 1.0 - 2.0 * (x * x + y * y) > _LEVEL_COS and q.item(2) >= MIN_WALKING_HEIGHT_M:
+            return ""  # clearly level and high (every tick): no angle computed
         tilt = self.context.tilt_deg()
         if tilt > TILT_LIMIT_DEG:
             return f"base tilt {tilt:.1f} deg above {TILT_LIMIT_DEG:.0f} deg"

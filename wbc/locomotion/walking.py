@@ -33,6 +33,7 @@ from wbc.locomotion.walking_groups import (
     TICK_COM_REFUSED,
     Measured,
     Targets,
+    address_record,
 )
 from wbc.locomotion.walking_kernels import (
     MEASURE_SIGNATURE,
@@ -52,6 +53,9 @@ from wbc.locomotion.walking_tuning import (
     YAW_ACCEL,
 )
 from wbc.model.description import LEGS
+
+# The phases by plain name (an enum member looked up on its class is slow in Python 3.11).
+_DONE, _STOPPING = WalkPhase.DONE, WalkPhase.STOPPING
 
 
 class Walking:
@@ -199,11 +203,13 @@ class Walking:
         feet_tasks = tuple(ctrl.foot_tasks[leg].reference for leg in LEGS)
         targets = Targets(ctrl.com_task.reference, ctrl.base_task.rotation,
                           ctrl.base_task.reference, feet_tasks)  # type: ignore[arg-type]
-        self._tick = _bound(walking_tick, TICK_SIGNATURE, measured, targets, self._params,
-                            self._state)
-        self._swing_leg = _bound(walking_swing, SWING_SIGNATURE, measured, targets,
-                                 self._params, self._state)
-        self._measure = _bound(walking_measure, MEASURE_SIGNATURE, measured, self._state)
+        # The groups stay referenced here: the kernel reads and writes at their addresses.
+        self._groups = (measured, targets)
+        addresses = address_record(measured, targets)
+        self._tick = _bound(walking_tick, TICK_SIGNATURE, addresses, self._params, self._state)
+        self._swing_leg = _bound(walking_swing, SWING_SIGNATURE, addresses, self._params,
+                                 self._state)
+        self._measure = _bound(walking_measure, MEASURE_SIGNATURE, addresses, self._state)
 
     def request_stop(self, now_s: float) -> None:
         """Zero velocity: the walk takes its last steps and ends on four loaded feet."""
@@ -245,15 +251,16 @@ class Walking:
             raise ConfigurationError("Walking.advance: call start(now_s) first")
         dt = max(now_s - self._last_s, 0.0)
         self._last_s = now_s
-        if self.phase is WalkPhase.DONE:
+        phase = self.phase
+        if phase is _DONE:
             self._measure(dt)
-            return self.phase
+            return phase
         if self._following:
             self._follow_command(dt)
-        status = self._tick(now_s, dt, self.phase is WalkPhase.STOPPING)
+        status = self._tick(now_s, dt, phase is _STOPPING)
         if status:
             self._handle_events(status)
-        if self.phase is WalkPhase.STOPPING and self._settled():
+        if self.phase is _STOPPING and self._settled():
             self._settle(now_s)
         return self.phase
 

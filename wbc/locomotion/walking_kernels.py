@@ -18,11 +18,13 @@ import math
 
 import numba
 from numba import types
+from numba.extending import intrinsic
 
 from wbc.controller.foot_reach import LEG_REACH_M
 from wbc.locomotion.foothold_planner import foothold_point
 from wbc.locomotion.swing_trajectory import swing_path
 from wbc.locomotion.walking_groups import (
+    ADDRESS_DTYPE,
     EV_LATE,
     EV_LIFT_OFF,
     EV_NONE,
@@ -57,20 +59,49 @@ from wbc.locomotion.walking_tuning import (
 )
 
 # Explicit signatures, so that numba compiles (or reads from its cache) at import, not in
-# the control tick that starts a walk. Arrays the controller owns are typed with any layout.
-_VECTOR = types.Array(types.float64, 1, "A")
-_MATRIX = types.Array(types.float64, 2, "A")
-MEASURED_TYPE = types.NamedTuple((_VECTOR, _VECTOR, _MATRIX, _VECTOR, _VECTOR, _MATRIX),
-                                 Measured)
-TARGETS_TYPE = types.NamedTuple((_MATRIX, _MATRIX, _MATRIX, types.UniTuple(_MATRIX, 4)),
-                                Targets)
+# the control tick that starts a walk.
+ADDRESS_TYPE = types.Array(numba.from_dtype(ADDRESS_DTYPE), 1, "C")
 PARAMS_TYPE = types.Array(numba.from_dtype(PARAMS_DTYPE), 1, "C")
 STATE_TYPE = types.Array(numba.from_dtype(STATE_DTYPE), 1, "C")
-TICK_SIGNATURE = types.int64(MEASURED_TYPE, TARGETS_TYPE, PARAMS_TYPE, STATE_TYPE,
-                             types.float64, types.float64, types.boolean)
-SWING_SIGNATURE = types.int64(MEASURED_TYPE, TARGETS_TYPE, PARAMS_TYPE, STATE_TYPE,
-                              types.int64)
-MEASURE_SIGNATURE = types.void(MEASURED_TYPE, STATE_TYPE, types.float64)
+TICK_SIGNATURE = types.int64(ADDRESS_TYPE, PARAMS_TYPE, STATE_TYPE, types.float64,
+                             types.float64, types.boolean)
+SWING_SIGNATURE = types.int64(ADDRESS_TYPE, PARAMS_TYPE, STATE_TYPE, types.int64)
+MEASURE_SIGNATURE = types.void(ADDRESS_TYPE, STATE_TYPE, types.float64)
+
+
+@intrinsic
+def _float64_pointer(typingctx, address):  # pragma: no cover - compiled
+    """The float64 data at ``address`` (an int64, from :func:`address_record`)."""
+    signature = types.CPointer(types.float64)(types.int64)
+
+    def codegen(context, builder, sig, args):
+        return builder.inttoptr(args[0], context.get_value_type(sig.return_type))
+
+    return signature, codegen
+
+
+@numba.njit(cache=True)
+def _measured(a):  # pragma: no cover - compiled
+    """The kinematics' arrays at the record's addresses."""
+    return Measured(numba.carray(_float64_pointer(a.com_position), (3,)),
+                    numba.carray(_float64_pointer(a.com_velocity), (3,)),
+                    numba.carray(_float64_pointer(a.base_rotation), (3, 3)),
+                    numba.carray(_float64_pointer(a.base_position), (3,)),
+                    numba.carray(_float64_pointer(a.base_velocity), (6,)),
+                    numba.carray(_float64_pointer(a.feet_position), (4, 3)))
+
+
+@numba.njit(cache=True)
+def _targets(a):  # pragma: no cover - compiled
+    """The task references at the record's addresses."""
+    feet = a.foot_references
+    return Targets(numba.carray(_float64_pointer(a.com_reference), (3, 3)),
+                   numba.carray(_float64_pointer(a.base_rotation_target), (3, 3)),
+                   numba.carray(_float64_pointer(a.base_reference), (3, 3)),
+                   (numba.carray(_float64_pointer(feet[0]), (3, 3)),
+                    numba.carray(_float64_pointer(feet[1]), (3, 3)),
+                    numba.carray(_float64_pointer(feet[2]), (3, 3)),
+                    numba.carray(_float64_pointer(feet[3]), (3, 3))))
 
 
 @numba.njit(cache=True)
@@ -245,8 +276,7 @@ def _stepping(s, now_s, stopping):  # pragma: no cover - compiled
 
 
 @numba.njit(TICK_SIGNATURE, cache=True)
-def walking_tick(measured, targets, params, state, now_s, dt,
-                 stopping):  # pragma: no cover - compiled
+def walking_tick(addresses, params, state, now_s, dt, stopping):  # pragma: no cover - compiled
     """One control tick of a walk at ``now_s`` [s], ``dt`` [s] after the last one
     (``stopping``: a stop was requested). Fills ``state.events`` (``EV_*`` per leg).
 
@@ -255,6 +285,7 @@ def walking_tick(measured, targets, params, state, now_s, dt,
         not finite: nothing after it was done).
     """
     p, s = params[0], state[0]
+    measured, targets = _measured(addresses[0]), _targets(addresses[0])
     _measure(measured, s, dt)
     late = False
     for i in range(4):
@@ -301,14 +332,15 @@ def walking_tick(measured, targets, params, state, now_s, dt,
 
 
 @numba.njit(SWING_SIGNATURE, cache=True)
-def walking_swing(measured, targets, params, state, leg):  # pragma: no cover - compiled
+def walking_swing(addresses, params, state, leg):  # pragma: no cover - compiled
     """Leg ``leg``'s swing at this tick (the tick it lifted off): its event (``EV_*``)."""
     p, s = params[0], state[0]
+    measured, targets = _measured(addresses[0]), _targets(addresses[0])
     cycle, phase = _phase(p, s, leg)
     return _swing(measured, targets, p, s, leg, cycle, phase)
 
 
 @numba.njit(MEASURE_SIGNATURE, cache=True)
-def walking_measure(measured, state, dt):  # pragma: no cover - compiled
+def walking_measure(addresses, state, dt):  # pragma: no cover - compiled
     """The measured velocity and the path walked only (a walk that is done)."""
-    _measure(measured, state[0], dt)
+    _measure(_measured(addresses[0]), state[0], dt)
