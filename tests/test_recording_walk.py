@@ -132,9 +132,10 @@ def test_a_recorded_walk_carries_its_command_and_replays_as_the_walking_plot(
         assert len(m["loaded"]) == 4 and set(m["swing_legs"]) <= set(LEGS)
     # It walked: the truth's forward velocity while the command held, and some swing.
     measured = np.array([m["measured_true"]["forward_mps"] for _, m in walk])[held]
-    print(f"\n/walking: {len(walk)} of {len(states)} states, the command at "
-          f"{FORWARD_MPS} m/s in {held.sum()}; the truth's forward velocity then "
-          f"{measured.mean():.3f} m/s on average")
+    with capsys.disabled():  # capsys holds the replay's output below
+        print(f"\n/walking: {len(walk)} of {len(states)} states, the command at "
+              f"{FORWARD_MPS} m/s in {held.sum()}; the truth's forward velocity then "
+              f"{measured.mean():.3f} m/s on average; {walk_recording.stat().st_size} bytes")
     assert 0.5 * FORWARD_MPS < measured.mean() < 1.5 * FORWARD_MPS
     assert any(m["swing_legs"] for _, m in walk)
     assert any(not all(m["loaded"]) for _, m in walk)
