@@ -8,6 +8,13 @@ stamp: the controller times a command from its arrival (the timeout of
 
 :class:`CmdVelReader` (the controller's end: BestEffort, KeepLast 1, which matches Reliable
 and BestEffort writers alike) and :class:`CmdVelWriter` (a teleop's end: Reliable, KeepLast 1).
+
+A ROS 2 node's ``/cmd_vel`` publisher (rclpy on Fast DDS, Reliable or BestEffort) matches the
+reader as it is, on ``ROS_DOMAIN_ID`` equal to the domain id; on a loopback interface the
+node needs ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (or ``ROS_STATIC_PEERS=127.0.0.1``):
+with ROS 2's default range it announces itself by multicast, which the participants on
+``lo`` do not use (docs/dds.md, "A ROS 2 node on rt/cmd_vel";
+``tests/ros2/test_ros2_cmd_vel_dds.py``).
 """
 
 # No `from __future__ import annotations`: cyclonedds resolves the field types from the real
