@@ -162,3 +162,50 @@ def test_a_recorded_walk_carries_its_command_and_replays_as_the_walking_plot(
     assert np.nanmax(plotted) == pytest.approx(FORWARD_MPS, abs=1e-9)
     # The plotted command is /walking's, state by state.
     np.testing.assert_allclose(plotted[np.isfinite(plotted)], commanded[:, 0], atol=1e-6)
+
+
+def test_a_live_client_is_told_of_walking_when_it_first_walks_and_receives_it():
+    """``/walking`` is advertised to a client already connected when the walk begins (the
+    channel is made then), and its messages reach the client as logged."""
+    import asyncio
+
+    import websockets
+
+    from tests.test_recording_live import SUBPROTOCOL
+
+    channels = RunChannels(port=0)
+    message = {"commanded": {"forward_mps": 0.3, "lateral_mps": 0.0, "yaw_rate_radps": 0.0},
+               "measured": None, "measured_true": None, "swing_legs": ["FL", "RR"],
+               "legs": list(LEGS), "loaded": None}
+
+    async def client() -> tuple[str, dict]:
+        async with websockets.connect(f"ws://127.0.0.1:{channels.port}",
+                                      subprotocols=[SUBPROTOCOL], max_size=None) as ws:
+            async def next_json(op: str) -> dict:
+                while True:
+                    frame = await asyncio.wait_for(ws.recv(), 10.0)
+                    if isinstance(frame, str) and json.loads(frame)["op"] == op:
+                        return json.loads(frame)
+
+            await next_json("advertise")  # the channels made with the recording
+            channels.log_walking(message, 0)
+            advertised = (await next_json("advertise"))["channels"]
+            (walking,) = [c for c in advertised if c["topic"] == "/walking"]
+            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                {"id": 1, "channelId": walking["id"]}]}))
+            for k in range(1, 200):  # until the subscription is in place
+                channels.log_walking(message, k * 20_000_000)
+                try:
+                    frame = await asyncio.wait_for(ws.recv(), 0.05)
+                except TimeoutError:
+                    continue
+                if isinstance(frame, bytes) and frame[0] == 1:
+                    return walking["schemaName"], json.loads(frame[13:])
+            raise AssertionError("no /walking message reached the client")
+
+    try:
+        schema, received = asyncio.run(client())
+    finally:
+        channels.close()
+    assert schema == "go2_wbc.Walking"
+    assert received == message
