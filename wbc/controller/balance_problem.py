@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numba
 import numpy as np
@@ -33,18 +34,16 @@ from wbc.model.support_polygon import SupportPolygon
 _INTEGRAL_FADE = 0.99
 
 
-# Separate arrays rather than a tuple of them: a bound call unboxes a tuple of arrays about
-# 25 ns an array slower.
 @numba.njit(cache=True)
-def _three_norms(a, b, c):  # pragma: no cover - compiled
-    """Euclidean norms of three vectors."""
-    return np.sqrt(a @ a), np.sqrt(b @ b), np.sqrt(c @ c)
-
-
-@numba.njit(cache=True)
-def _norm(a):  # pragma: no cover - compiled
-    """Euclidean norm of a vector."""
-    return np.sqrt(a @ a)
+def _error_norms(com, base, posture, feet, out):  # pragma: no cover - compiled
+    """Euclidean norms of the CoM, base orientation, posture and each foot's task errors
+    into ``out`` (3 + feet,)."""
+    out[0] = np.sqrt(com @ com)
+    out[1] = np.sqrt(base @ base)
+    out[2] = np.sqrt(posture @ posture)
+    for i in range(len(feet)):
+        foot = feet[i]
+        out[3 + i] = np.sqrt(foot @ foot)
 
 
 class BalanceProblem:
@@ -134,11 +133,15 @@ class BalanceProblem:
         self.stance: list[bool] = []
         self.swing_legs: list[str] = []
         self._base_integral = np.zeros(3)
-        # The tasks' error arrays are never replaced: their norms' calls are bound once.
-        self._error_norms = bind_compiled(_three_norms, self.com_task.error,
-                                          self.base_task.error, self.posture_task.error)
-        self._foot_error_norms = {leg: bind_compiled(_norm, task.error)
-                                  for leg, task in self.foot_tasks.items()}
+        #: The built-in tasks' error norms [m, rad, rad, m per foot] (3 + legs,), as
+        #: :meth:`error_norms_step` last wrote them.
+        self.error_norms = np.zeros(3 + len(self.legs))
+        # The tasks' error arrays are never replaced: the norms' call is bound once.
+        self._error_norms_step = (_error_norms, (
+            self.com_task.error, self.base_task.error, self.posture_task.error,
+            tuple(self.foot_tasks[leg].error for leg in self.legs), self.error_norms))
+        self._error_norms = bind_compiled(_error_norms, *self._error_norms_step[1])
+        self._foot_keys = {leg: (leg + "_foot", 3 + i) for i, leg in enumerate(self.legs)}
 
     @property
     def builtin_tasks(self) -> tuple:
@@ -167,14 +170,24 @@ class BalanceProblem:
         """A foot leaves the ground: its target is where it is, at rest."""
         self.foot_tasks[leg].set_motion(self.kinematics.frame_position[self._foot_rows[leg]])
 
-    def task_errors(self, swing_legs: Sequence[str]) -> dict[str, float]:
+    def task_errors(self, swing_legs: Sequence[str], *,
+                    computed: bool = False) -> dict[str, float]:
         """The built-in tasks' error norms [m, rad] at the last update, the swinging feet's
-        as ``<leg>_foot``."""
-        com, base, posture = self._error_norms()
-        errors = {"com": com, "base_orientation": base, "posture": posture}
+        as ``<leg>_foot``; ``computed``: as :meth:`error_norms_step` last wrote them (the
+        controller's compiled solve runs it), else computed now."""
+        if not computed:
+            self._error_norms()
+        values = self.error_norms.tolist()
+        errors = {"com": values[0], "base_orientation": values[1], "posture": values[2]}
         for leg in swing_legs:
-            errors[leg + "_foot"] = self._foot_error_norms[leg]()
+            key, index = self._foot_keys[leg]
+            errors[key] = values[index]
         return errors
+
+    def error_norms_step(self) -> tuple[Any, tuple]:
+        """The norms of :meth:`task_errors` as a step of a compiled program, writing
+        :attr:`error_norms` (every foot's, swinging or not)."""
+        return self._error_norms_step
 
     def follow(self, schedule: ContactSchedule, leg: str | None = None, *,
                started: bool = True) -> bool:

@@ -48,6 +48,12 @@ class JointReference:
         self._anchored = False
         self._offset = np.zeros(n)
 
+    @property
+    def decay(self) -> np.ndarray:
+        """The per-joint decay factors of the last :meth:`prepare`'s period (joints,): the
+        same array every tick, updated in place."""
+        return self._keep
+
     def set_leak_time(self, joints: slice | list[int], leak_time_s: float) -> None:
         """Time constant [s] with which these joints' desired state decays towards the
         measured one (0: no decay, only the bounds)."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from typing import NamedTuple, TypedDict
+from typing import Any, NamedTuple, TypedDict
 
 import numba
 import numpy as np
@@ -35,8 +35,9 @@ class MotorArrays(TypedDict):
 
 
 class JointShaping(NamedTuple):
-    """The shaper's per-joint numbers (joints,), built once; ``kp``, ``kd`` change in place
-    with the legs' stance."""
+    """The shaper's per-joint numbers (joints,), built once and changed in place (``kp``,
+    ``kd`` with the legs' stance, the rest by :meth:`MotorCommandShaper.retune`): a compiled
+    call bound to them never needs binding again."""
 
     #: Known joint damping [N m s/rad] and friction [N m] added along ``dq_des``.
     damping: np.ndarray
@@ -47,17 +48,18 @@ class JointShaping(NamedTuple):
     effort_limit: np.ndarray
     kp: np.ndarray
     kd: np.ndarray
-    #: The friction's tanh velocity scale [rad/s].
-    velocity_scale: float
+    #: The friction's tanh velocity scale [rad/s] (one value for every joint).
+    velocity_scale: np.ndarray
 
 
 class ReferenceState(NamedTuple):
-    """The :class:`JointReference`'s desired state (in/out) [rad], [rad/s] and bounds."""
+    """The :class:`JointReference`'s desired state (in/out) [rad], [rad/s] and its bounds
+    (joints,) [rad], [rad/s] (the reference's one value for every joint)."""
 
     q_des: np.ndarray
     dq_des: np.ndarray
-    max_position_error: float
-    max_velocity_error: float
+    max_position_error: np.ndarray
+    max_velocity_error: np.ndarray
 
 
 #: The inputs (measured state, QP outputs): any float64 vector, read-only or not.
@@ -84,13 +86,13 @@ def _shape(joints, reference, keep, dt, q, dq, qdd, tau_qp, out):  # pragma: no 
     for i in range(q.size):
         qr = q[i] + keep[i] * (q_ref[i] - q[i])
         dqr = dq[i] + keep[i] * (dq_ref[i] - dq[i]) + dt * qdd[i]
-        dqr = dq[i] + min(max(dqr - dq[i], -max_velocity_error), max_velocity_error)
+        dqr = dq[i] + min(max(dqr - dq[i], -max_velocity_error[i]), max_velocity_error[i])
         qr += dt * dqr
-        qr = q[i] + min(max(qr - q[i], -max_position_error), max_position_error)
+        qr = q[i] + min(max(qr - q[i], -max_position_error[i]), max_position_error[i])
         q_ref[i], dq_ref[i] = qr, dqr
         tau_ff = tau_qp[i]
         if damping[i] != 0.0 or friction[i] != 0.0:
-            tau_ff += damping[i] * dqr + friction[i] * np.tanh(dqr / velocity_scale)
+            tau_ff += damping[i] * dqr + friction[i] * np.tanh(dqr / velocity_scale[i])
             tau_ff = min(max(tau_ff, -tau_max[i]), tau_max[i])
         tau = tau_ff + kp[i] * (qr - q[i]) + kd[i] * (dqr - dq[i])
         out[0, i], out[1, i], out[2, i], out[3, i] = qr, dqr, kp[i], kd[i]
@@ -167,15 +169,23 @@ class MotorCommandShaper:
         self.kd = np.full(n, settings.stance_kd)
         self._stance = np.ones(n, dtype=bool)
         self._out_shape = (6, n)
-        self._bind()
+        reference = self.reference
+        self._joints = JointShaping(self._damping, self._friction, self.tau_max,
+                                    self.effort_limit, self.kp, self.kd, np.empty(n))
+        self._reference = ReferenceState(reference.q_des, reference.dq_des, np.empty(n),
+                                         np.empty(n))
+        self._fill_scalars()
+        self._shape = _bind_shape(self._joints, self._reference)
+        #: The rows ``[q_des, dq_des, kp, kd, tau_ff, tau]`` (6, joints) that
+        #: :meth:`compiled_step` writes (overwritten each tick: :meth:`command` copies them).
+        self.command_rows = np.zeros(self._out_shape)
 
-    def _bind(self) -> None:
-        settings, reference = self.settings, self.reference
-        self._shape = _bind_shape(
-            JointShaping(self._damping, self._friction, self.tau_max, self.effort_limit,
-                         self.kp, self.kd, float(settings.friction_velocity_scale_rad_s)),
-            ReferenceState(reference.q_des, reference.dq_des, reference.max_position_error,
-                           reference.max_velocity_error))
+    def _fill_scalars(self) -> None:
+        """The settings' and the reference's scalars into the per-joint arrays the compiled
+        shaping reads (in place: every call bound to them stays bound)."""
+        self._joints.velocity_scale[:] = float(self.settings.friction_velocity_scale_rad_s)
+        self._reference.max_position_error[:] = self.reference.max_position_error
+        self._reference.max_velocity_error[:] = self.reference.max_velocity_error
 
     def retune(self, settings: ShapingSettings) -> None:
         """Take the gains, leaks and reference bounds of ``settings`` (a walk's faster swing
@@ -186,7 +196,7 @@ class MotorCommandShaper:
         self.reference.max_velocity_error = settings.reference_velocity_bound_rad_s
         for stance in (True, False):
             self.set_stance(np.flatnonzero(self._stance == stance).tolist(), stance)
-        self._bind()
+        self._fill_scalars()
 
     def set_stance(self, joints: Sequence[int], stance: bool) -> None:
         """Give a leg's joints (their indices) the stance or the swing gains and leak."""
@@ -215,3 +225,27 @@ class MotorCommandShaper:
                     _float_vector(tau_qp), out)
         return {"q_des": out[0], "dq_des": out[1], "kp": out[2], "kd": out[3],
                 "tau_ff": out[4], "tau": out[5]}
+
+    def compiled_step(self, q: np.ndarray, dq: np.ndarray, qdd: np.ndarray,
+                      tau_qp: np.ndarray) -> tuple[Any, tuple]:
+        """:meth:`shape` as a step of a :class:`~wbc.core.compiled_program.CompiledProgram`
+        (the controller's compiled solve runs it after accepting the solution), writing
+        :attr:`command_rows`. Call :meth:`prepare` before each run.
+
+        Args:
+            q, dq, qdd, tau_qp: As :meth:`shape` takes them: float64 vectors (joints,) that
+                stay the same objects, updated in place by the caller before each run.
+        """
+        return _shape, (self._joints, self._reference, self.reference.decay,
+                        self.control_period_s, q, dq, qdd, tau_qp, self.command_rows)
+
+    def prepare(self, q: np.ndarray, dq: np.ndarray) -> None:
+        """Before a run of :meth:`compiled_step`: anchor the reference at the measured
+        joint state [rad], [rad/s] if it was released, and its decay factors for the
+        period (:meth:`JointReference.prepare`)."""
+        self.reference.prepare(q, dq, self.control_period_s)
+
+    def command(self) -> tuple[np.ndarray, ...]:
+        """The command :meth:`compiled_step` last wrote: ``q_des, dq_des, kp, kd, tau_ff,
+        tau`` (new arrays, owned by the caller; :meth:`shape`'s, in its order)."""
+        return tuple(self.command_rows.copy())

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -12,10 +12,10 @@ from tasks.task import Task
 from tasks.variable_layout import VariableLayout
 from wbc.backends.backend import QpBackend
 from wbc.backends.qp_problem import QpProblem
-from wbc.controller import qp_kernel
 from wbc.controller.joint_torques import JointTorques
 from wbc.controller.task_stack import TaskStack
 from wbc.controller.tick_plan import Regularization, TickPlan
+from wbc.core.compiled_program import Step
 from wbc.core.errors import ConfigurationError
 from wbc.model.kinematics import RobotKinematics
 
@@ -32,11 +32,10 @@ class ProblemBuilder:
     is used (or :meth:`prepare` makes it): its arrays, its compiled calls bound to them, its
     reduction. Registering or removing anything drops every plan.
 
-    Every tick, :meth:`evaluate` runs the tasks and constraints and :meth:`assemble` stacks
-    them (:meth:`build`: both, one compiled call): into the full QP over ``x = [qdd,
-    forces, slacks]``, or, when the constraints declare both :class:`tasks.Elimination`
-    kinds (once each, on the builder's contact task) and ``reduce`` is set, into the
-    reduced QP over the free variables (:mod:`wbc.controller.qp_kernel`), same solution."""
+    Every tick, :meth:`build` runs the tasks and constraints and stacks them in one compiled
+    call (:meth:`evaluate` then :meth:`assemble`): the full QP over ``x = [qdd, forces,
+    slacks]``, or, when the constraints declare both :class:`tasks.Elimination` kinds (on the
+    builder's contact task) and ``reduce`` is set, the reduced QP (:mod:`.qp_kernel`)."""
 
     def __init__(self, kinematics: RobotKinematics, contact_task: ContactTask,
                  contacts: Sequence[str], *, leg_columns: np.ndarray | None = None,
@@ -74,6 +73,7 @@ class ProblemBuilder:
         #: Whether the last :meth:`assemble` produced the reduced QP.
         self.reduced = False
         self._stale = False
+        self._after_solve: Callable[[TickPlan], Sequence[Step]] | None = None
 
     # ------------------------------------------------------------------ registration
 
@@ -141,6 +141,14 @@ class ProblemBuilder:
         """Use these small costs from the next tick (each layout's plan is made again)."""
         self._regularization = Regularization(**vars(regularization))
         self._drop_plans()
+
+    def set_after_solve(self, steps: Callable[[TickPlan], Sequence[Step]] | None) -> None:
+        """Steps :meth:`solve`'s compiled call runs once it accepted a solution: ``steps(plan)``
+        gives a layout's (kernels and their arguments, e.g. shaping the motor command)."""
+        self._after_solve = steps
+        for plan in self._plans.values():
+            plan.after_solve = steps
+            plan.forget_solve()
 
     def _require_frames(self, item: Task | Constraint) -> None:
         missing = [f for f in item.frames if f not in self.kinematics.frames]
@@ -249,6 +257,7 @@ class ProblemBuilder:
                             kinematics=self.kinematics, contact_task=self.contact_task,
                             tau_prev=self.tau_prev, eliminated=eliminated,
                             leg_columns=self.leg_columns)
+            plan.after_solve = self._after_solve
             self._plans[loaded] = plan
         return plan
 
@@ -257,12 +266,11 @@ class ProblemBuilder:
                 backend: QpBackend | None = None) -> list[QpProblem]:
         """Get the plans of these sets of loaded contacts ready before they are needed.
 
-        Makes each layout's plan (its arrays, the constraints' and the reduction's compiled
-        calls bound to them) and binds every registered task's kernel, active or not: a
-        layout's first tick, and a kernel's first call in a process (read from numba's
-        cache), otherwise cost milliseconds, at the moment a foot leaves or touches the
-        ground. The current layout and everything the next tick computes are left as they
-        were. A task that cannot run yet (no target) is left to bind on its first tick.
+        Makes each layout's plan (its arrays, the compiled calls bound to them) and binds
+        every registered task's kernel, active or not: a layout's first tick, and a
+        kernel's first call in a process, otherwise cost milliseconds, at the moment a foot
+        leaves or touches the ground. The current layout and everything the next tick
+        computes are left as they were (a task with no target yet binds on its first tick).
 
         With ``swing_tasks`` (a task for each contact, active exactly while that contact
         is not loaded; the others as they are now), each layout's compiled tick program
@@ -296,12 +304,9 @@ class ProblemBuilder:
     # ------------------------------------------------------------------ the tick
 
     def evaluate(self) -> None:
-        """Run the contact task, the active tasks and the constraints at the last state.
-
-        When the reduced QP can be used, the eliminated constraints (floating-base dynamics,
-        stance contacts) are not written: :attr:`problem` and :meth:`assemble_full` write
-        them on demand.
-        """
+        """Run the contact task, the active tasks and the constraints at the last state (with
+        the reduced QP, the eliminated constraints only when :attr:`problem` or
+        :meth:`assemble_full` need them)."""
         kin = self.kinematics
         plan = self._plan()
         self.contact_task.evaluate(kin)
@@ -371,28 +376,11 @@ class ProblemBuilder:
         ``forces`` (contacts, 3) [N] when given, zeros for the contacts without force
         variables.
         """
-        plan = self._plan()
-        layout = plan.layout
-        tau = np.empty(self.nv - 6)
-        if forces is None:
-            forces = np.empty((len(self.contacts), 3))
-        reduction = plan.reduction
-        if self.reduced and reduction is not None:
-            qp_kernel.finish(reduction.T, reduction.t0, solution, plan.x, plan.x_prev,
-                             reduction.problem.A, reduction.tau_first, reduction.tau_offset,
-                             tau, layout.loaded, layout.force_start, forces)
-        else:
-            plan.x[:] = solution
-            plan.x_prev[:] = plan.x
-            tau[:] = self.torques()
-            forces[:] = 0.0
-            forces[layout.loaded] = plan.x[layout.force_start:layout.slack_start].reshape(-1, 3)
-        return plan.x, tau
+        return self._plan().accept(solution, forces, reduced=self.reduced)
 
     def torques(self) -> np.ndarray:
         """Joint torques [N m] of the last accepted solution: ``tau = A_tau x + h_a``."""
-        plan = self._plan()
-        return plan.tau_block.A @ plan.x + self.kinematics.nonlinear_effects[6:]
+        return self._plan().torques()
 
     def reset_rates(self, x: np.ndarray | None = None) -> None:
         """Set the previous solution the rate costs pull towards (zeros when ``None``)."""

@@ -177,6 +177,9 @@ class TickPlan:
         #: The torques [N m] and forces (contacts, 3) [N] of the last solve in compiled code.
         self.tau, self.forces = np.zeros(nv - 6), np.zeros((len(layout.contacts), 3))
         self._solve: tuple[QpBackend | None, CompiledProgram | None, int] = (None, None, -1)
+        #: Steps the compiled solve runs after accepting a solution, made from this plan
+        #: (:meth:`ProblemBuilder.set_after_solve`); ``None``: none.
+        self.after_solve: Callable[[TickPlan], Sequence[Step]] | None = None
         calls = [(c.tick_call(kinematics, layout, b), g)
                  for c, b, g in zip(constraints, self.blocks, gone)]
         #: The constraints' tick calls, without those the reduction eliminates.
@@ -229,11 +232,38 @@ class TickPlan:
         if compiled is not None:
             kernel, arguments, z = compiled
             layout, r = self.layout, reduction
+            after = () if self.after_solve is None else tuple(self.after_solve(self))
             program = CompiledProgram([Guard(kernel, arguments), (qp_kernel.accept, (
                 r.T, r.t0, z, self.x, self.x_prev, problem.A, r.tau_first, r.tau_offset,
-                self.tau, layout.loaded, layout.force_start, self.forces, self._tau_prev))])
+                self.tau, layout.loaded, layout.force_start, self.forces, self._tau_prev)),
+                *after])
         self._solve = (backend, program, problem.structure_version)
         return program
+
+    def accept(self, solution: np.ndarray, forces: np.ndarray | None, *,
+               reduced: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Record a solver's solution of the reduced QP (``reduced``) or of the full one:
+        ``x`` and the joint torques [N m] it implies (a new array); fills ``forces``
+        (contacts, 3) [N] (a new array when ``None``), zeros for contacts without forces."""
+        layout, reduction = self.layout, self.reduction
+        tau = np.empty(layout.nv - 6)
+        if forces is None:
+            forces = np.empty((len(layout.contacts), 3))
+        if reduced and reduction is not None:
+            qp_kernel.finish(reduction.T, reduction.t0, solution, self.x, self.x_prev,
+                             reduction.problem.A, reduction.tau_first, reduction.tau_offset,
+                             tau, layout.loaded, layout.force_start, forces)
+        else:
+            self.x[:] = solution
+            self.x_prev[:] = self.x
+            tau[:] = self.torques()
+            forces[:] = 0.0
+            forces[layout.loaded] = self.x[layout.force_start:layout.slack_start].reshape(-1, 3)
+        return self.x, tau
+
+    def torques(self) -> np.ndarray:
+        """Joint torques [N m] of the last accepted solution: ``tau = A_tau x + h_a``."""
+        return self.tau_block.A @ self.x + self._kinematics.nonlinear_effects[6:]
 
     def forget_solve(self) -> None:
         """Ask the backend for its compiled solve again (after it was set up anew)."""

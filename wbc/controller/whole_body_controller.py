@@ -7,12 +7,8 @@ from typing import Any
 
 import numpy as np
 
-# The tasks' modules, not the package: `import tasks` imports wbc, and with it this module,
-# before the package has any names (see wbc/__init__.py).
-from tasks.constraint import Constraint
-from tasks.task import Task
 from wbc.backends.backend import make_backend
-from wbc.backends.qp_problem import QpProblem, QpResult
+from wbc.backends.qp_problem import QpResult
 from wbc.controller.balance_problem import BalanceProblem
 from wbc.controller.contact_schedule import ContactSchedule
 from wbc.controller.control_output import ControlOutput, ControlStatus
@@ -20,13 +16,16 @@ from wbc.controller.controller_config import ControllerConfig, config_with_overr
 from wbc.controller.foot_reach import FootReach
 from wbc.controller.motor_command_shaper import MotorCommandShaper, joint_types
 from wbc.controller.qp_recovery import QpRecovery
+from wbc.controller.task_composition import TaskComposition
+from wbc.controller.tick_plan import TickPlan
+from wbc.core.compiled_program import Step
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_vector, check_name
 from wbc.model.description import FOOT_FRAMES, FOOT_RADIUS_M, JOINT_NAMES, LEGS, Go2Description
 from wbc.model.kinematics import RobotKinematics
 
 
-class WholeBodyController:
+class WholeBodyController(TaskComposition):
     """Force-level whole-body control of the GO2 by one QP per tick, composed of parts:
     :attr:`schedule` (:class:`ContactSchedule`: which feet stand, their force bounds and
     ramps), :attr:`balance` (:class:`BalanceProblem`: the built-in tasks and constraints on
@@ -101,6 +100,10 @@ class WholeBodyController:
                                         tau_max=self.balance.torque_limits.tau_max,
                                         effort_limit=self.description.effort_limit,
                                         joint_types=joint_types(JOINT_NAMES))
+        # The measured joint state as the kinematics holds it (views updated in place): what
+        # the motor command's shaping reads inside the compiled solve.
+        self._q_joints, self._v_joints = self.kinematics.q[7:], self.kinematics.v[6:]
+        self.builder.set_after_solve(self._after_solve)
         self.recovery = QpRecovery(cfg.solver.backend, self.builder, motor=self.motor,
                                    torque_limits=self.balance.torque_limits,
                                    damping=cfg.shaping.fallback_damping)
@@ -130,51 +133,6 @@ class WholeBodyController:
     def tau_max(self, value: np.ndarray) -> None:
         self.balance.torque_limits.tau_max = value  # validated; the QP's rows read it in place
         self.motor.tau_max[:] = self.balance.torque_limits.tau_max  # and the feed-forward's
-
-    # ------------------------------------------------------------------ composition
-
-    def add_task(self, task: Task) -> Task:
-        """Add a task of your own to the QP's cost (from the next tick); returns it.
-
-        The task reads :attr:`kinematics` (the frames it names must be among the
-        controller's: pass them as ``extra_frames``). Example: ``examples/custom_task.py``.
-        """
-        return self.builder.add_task(task)
-
-    def remove_task(self, task: Task) -> None:
-        """Remove a task added with :meth:`add_task`."""
-        if task in self.balance.builtin_tasks:
-            raise ConfigurationError(f"task: {type(task).__name__} is built in; set its weight "
-                                     "to 0 to take it out of the cost")
-        self.builder.remove_task(task)
-
-    def add_constraint(self, constraint: Constraint) -> Constraint:
-        """Add a constraint of your own to the QP (from the next tick); returns it."""
-        return self.builder.add_constraint(constraint)
-
-    def remove_constraint(self, constraint: Constraint) -> None:
-        """Remove a constraint (one of yours, or a built-in one to replace it)."""
-        self.builder.remove_constraint(constraint)
-
-    @property
-    def tasks(self) -> list[Task]:
-        """The registered tasks (built-in first)."""
-        return list(self.builder.tasks)
-
-    @property
-    def constraints(self) -> list[Constraint]:
-        """The registered constraints (built-in first)."""
-        return list(self.builder.constraints)
-
-    @property
-    def problem(self) -> QpProblem:
-        """The full QP over ``x`` as last updated (its cost is filled on demand)."""
-        return self.builder.problem
-
-    @property
-    def last_solution(self) -> np.ndarray:
-        """The last solved QP's ``x`` in the current layout (zeros before any)."""
-        return self.builder.solution
 
     # ------------------------------------------------------------------ references
 
@@ -328,7 +286,7 @@ class WholeBodyController:
         if q.shape != (nq,) or v.shape != (nv,):
             return self._fallback(v, f"state: expected q {(nq,)} and v {(nv,)}, "
                                      f"received {q.shape} and {v.shape}", t0)
-        if not self.kinematics.compute(q, v):  # checks q and v are finite, in compiled code
+        if not self.kinematics.compute_vectors(q, v):  # checks they are finite, compiled
             bad = [f"q[{i}]" for i in np.flatnonzero(~np.isfinite(q))]
             bad += [f"v[{i}]" for i in np.flatnonzero(~np.isfinite(v))]
             return self._fallback(v, f"state: non-finite values at {', '.join(bad)}", t0)
@@ -338,12 +296,16 @@ class WholeBodyController:
         t1 = time.perf_counter()
         problem = builder.build()
         t2 = time.perf_counter()
-        # Solved and accepted in one compiled call where the backend allows it; else (and
-        # on a failure, solved again to name it) through the backend's solve.
+        # Solved, accepted, the motor command shaped and the error norms computed in one
+        # compiled call where the backend allows it; else (and on a failure, solved again to
+        # name it) through the backend's solve.
+        self.motor.prepare(self._q_joints, self._v_joints)
         solved, status, message, group = builder.solve(self.backend), ControlStatus.OK, "", ""
         t3 = time.perf_counter()
         if solved is not None:
             x, tau_qp, forces = solved
+            command = self.motor.command()
+            task_errors = self.balance.task_errors(self.balance.swing_legs, computed=True)
         else:
             result = self.backend.solve(problem)
             t3 = time.perf_counter()
@@ -359,17 +321,28 @@ class WholeBodyController:
             if status is not ControlStatus.OK:
                 np.clip(tau_qp, -self.tau_max, self.tau_max, out=tau_qp)
             builder.tau_prev[:] = tau_qp
+            shaped = self.motor.shape(q[7:], v[6:], x[6:nv], tau_qp)
+            command = (shaped["q_des"], shaped["dq_des"], shaped["kp"], shaped["kd"],
+                       shaped["tau_ff"], shaped["tau"])
+            task_errors = self.balance.task_errors(self.balance.swing_legs)
         self.recovery.tau_good = tau_qp
         self._forces = forces
-        command = self.motor.shape(q[7:], v[6:], x[6:nv], tau_qp)
-        task_errors = self.balance.task_errors(self.balance.swing_legs)
         t4 = time.perf_counter()
+        q_des, dq_des, kp, kd, tau_ff, tau = command
         return ControlOutput(
-            **command, qdd=x[:nv].copy(), forces=forces, status=status, message=message,
+            q_des=q_des, dq_des=dq_des, kp=kp, kd=kd, tau_ff=tau_ff, tau=tau,
+            qdd=x[:nv].copy(), forces=forces, status=status, message=message,
             infeasible_group=group, task_errors=task_errors,
             timings={"model": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2,
-                     "total": t4 - t0},
-        )
+                     "total": t4 - t0})
+
+    def _after_solve(self, plan: TickPlan) -> list[Step]:
+        """What the compiled solve of ``plan``'s layout runs once it accepted a solution:
+        the motor command's shaping and the built-in tasks' error norms."""
+        nv = self._nv
+        return [self.motor.compiled_step(self._q_joints, self._v_joints, plan.x[6:nv],
+                                         plan.tau),
+                self.balance.error_norms_step()]
 
     # ------------------------------------------------------------------ failures
 

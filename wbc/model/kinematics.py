@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numba
 import numpy as np
 import pinocchio as pin
 
@@ -91,7 +92,11 @@ class RobotKinematics:
         self.frame_jacobian: np.ndarray = record["frame_jacobian"]
         self.frame_velocity: np.ndarray = record["frame_velocity"]
         self.frame_drift: np.ndarray = record["frame_drift"]
-
+        vector = numba.types.Array(numba.float64, 1, "A", readonly=True)
+        # The compiled overload for float64 vectors: called without the dispatcher's typing
+        # of the two record arrays (half a microsecond a call).
+        self._update_vectors = _update.compile((vector, vector, numba.typeof(self._model),
+                                                numba.typeof(self._data)))
 
     def frame_index(self, name: str) -> int:
         """Index of frame ``name`` in the ``frame_*`` arrays.
@@ -131,6 +136,18 @@ class RobotKinematics:
         raise ConfigurationError(
             f"RobotKinematics.compute: expected q of shape ({self.nq},) and v of shape "
             f"({self.nv},), received {np.shape(q)} and {np.shape(v)}")
+
+    def compute_vectors(self, q: np.ndarray, v: np.ndarray) -> bool:
+        """:meth:`compute` for inputs the caller has made float64 NumPy vectors (1-D), as
+        the controller's tick does: the compiled call without numba's typing of its
+        arguments. Anything else (another dtype, a list, a matrix) is the caller's error:
+        use :meth:`compute`."""
+        status = self._update_vectors(q, v, self._model, self._data)
+        if status == _DONE:
+            return True
+        if status == _NOT_FINITE:
+            return False
+        return self.compute(q, v)  # raises, naming the sizes
 
     def checked_compute(self, q: np.ndarray, v: np.ndarray) -> None:
         """:meth:`compute` after converting and validating the inputs (off the hot path).
