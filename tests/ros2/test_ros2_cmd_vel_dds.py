@@ -60,14 +60,20 @@ def test_an_rclpy_twist_reaches_the_controller_s_reader_with_either_qos() -> Non
             try:
                 wait_until(lambda p=publisher: p.publisher.get_subscription_count() or None,
                            timeout_s=DISCOVERY_S, what="rclpy to discover the Cyclone reader")
-                sent = (0.25 + 0.1 * k, -0.1, 0.5)
+                sent, seen = (0.25 + 0.1 * k, -0.1, 0.5), []
 
-                def received(p: TwistPublisher = publisher, sent=sent):
+                def received(p: TwistPublisher = publisher, sent=sent, seen=seen):
                     p.publish(*sent)  # until discovery completes the other way too
-                    return reader.take()
+                    sample = reader.take()
+                    if sample is not None:
+                        seen.append(sample)
+                    # The previous publisher's last Twists may still be in flight.
+                    return sample if sample == sent else None
 
-                assert wait_until(received, timeout_s=DISCOVERY_S, poll_s=0.05,
-                                  what="the Twist to arrive") == sent
+                wait_until(received, timeout_s=DISCOVERY_S, poll_s=0.05,
+                           what=f"the Twist {sent} to arrive",
+                           context=lambda seen=seen: f"received instead: {seen[-5:]}")
+                assert all(s in {sent, (0.25 + 0.1 * (k - 1), -0.1, 0.5)} for s in seen), seen
             finally:
                 publisher.close()
     finally:
