@@ -20,7 +20,8 @@ class MujocoRobot:
     plant is built that way), and its feet come in the order its legs first appear in it;
     :class:`actions.MappedRobot` wires both to the description by name. Each
     :meth:`read_sensors` samples the simulated sensors once (one control period); writing a
-    command advances the simulation by one control period. :meth:`read_state` is the exact
+    command advances the simulation by one control period, its arrays read before the write
+    returns (it is also :meth:`apply_command`). :meth:`read_state` is the exact
     state, which only a simulator has (metrics, tests, ``--state truth``).
 
     Args:
@@ -83,6 +84,11 @@ class MujocoRobot:
                                  legs=False, fix="send it through MappedRobot (a ControlLoop "
                                  "does), which maps the controller's command by name")
         self.sim.step_actuator_command(command, self.substeps)
+
+    #: The drivers read the command's arrays before the step returns and keep nothing of
+    #: it (:class:`actions.robot.robot_capabilities.AppliesCommandAtOnce`): a loop hands it
+    #: the controller's command without a copy.
+    apply_command = write_command
 
 
 def physics_steps_per_period(control_period_s: float, timestep_s: float) -> int:

@@ -276,7 +276,10 @@ class Go2Simulator:
                              + command.kd * command.dq_des)
             np.negative(command.kp, out=self._kp)
             np.negative(command.kd, out=self._kd)
-        self._advance(n_steps)
+        if self._pushes or self._xfrc_dirty:
+            self._advance(n_steps)
+        elif n_steps > 0:  # _advance's common case, without its call: one step call
+            mujoco.mj_step(self.model, self.data, n_steps)
 
     def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
         """Joint positions [rad] and velocities [rad/s] (12,), the plant's actuator order."""

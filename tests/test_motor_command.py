@@ -5,7 +5,11 @@ import pytest
 
 from wbc.model.description import JOINT_NAMES, UNITREE_SDK_JOINT_NAMES
 from wbc.model.joint_map import JointMap
-from wbc.robot_io.motor_command import MotorCommand, within_effort_limits
+from wbc.robot_io.motor_command import (
+    MotorCommand,
+    command_and_torque_fine,
+    within_effort_limits,
+)
 
 
 def random_command(rng: np.random.Generator) -> MotorCommand:
@@ -116,3 +120,26 @@ def test_copy_owns_its_arrays():
     copy.kp[0] = -1.0
     assert type(copy) is MotorCommand and cmd.kp[0] >= 0.0
     np.testing.assert_array_equal(copy.tau_ff, cmd.tau_ff)
+
+
+def test_the_loops_one_call_check_is_the_command_check_and_the_torque_check():
+    rng = np.random.default_rng(11)
+    limit = np.full(12, 23.7)
+    specials = [np.nan, np.inf, -1e-300, 23.7, 23.700000000000003, -30.0]
+    verdicts = set()
+    for _ in range(300):
+        cmd = random_command(rng)
+        tau = rng.uniform(-23.7, 23.7, 12)
+        if rng.integers(2):
+            field = ("q_des", "dq_des", "kp", "kd", "tau_ff")[rng.integers(5)]
+            getattr(cmd, field)[rng.integers(12)] = specials[rng.integers(len(specials))]
+        if rng.integers(3) == 0:
+            tau[rng.integers(12)] = specials[rng.integers(len(specials))]
+        expected = cmd.problems(limit) == "" and within_effort_limits(tau, limit)
+        assert command_and_torque_fine(cmd.q_des, cmd.dq_des, cmd.kp, cmd.kd, cmd.tau_ff, tau,
+                                       limit) is expected
+        verdicts.add(expected)
+    assert verdicts == {True, False}
+    with pytest.raises(TypeError):  # not float64 vectors: the loop falls back to the checks
+        command_and_torque_fine(cmd.q_des, cmd.dq_des, cmd.kp, cmd.kd, cmd.tau_ff,
+                                tau.astype(np.float32), limit)

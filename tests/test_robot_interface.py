@@ -232,3 +232,33 @@ def test_importing_actions_leaves_the_robot_loop_until_it_is_used():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=ROOT, check=False)
     assert done.returncode == 0, done.stderr
+
+
+def test_a_robot_that_applies_a_command_at_once_gets_it_without_a_copy():
+    from actions.robot.robot_capabilities import AppliesCommandAtOnce
+
+    class AtOnce(SdkGo2):
+        joint_names, leg_names = JOINT_NAMES, LEGS
+
+        def apply_command(self, command: MotorCommand) -> None:
+            self.commands.append(command)
+
+    keeping = SdkGo2(SensorRecord.zeros())
+    keeping.joint_names, keeping.leg_names = JOINT_NAMES, LEGS  # type: ignore[misc]
+    at_once = AtOnce(SensorRecord.zeros())
+    assert isinstance(at_once, AppliesCommandAtOnce)
+    assert not isinstance(keeping, AppliesCommandAtOnce)
+    command = MotorCommand.pure_torque(np.arange(12.0))
+    MappedRobot(at_once).write_command(command)
+    MappedRobot(keeping).write_command(command)
+    assert at_once.commands == [command] and at_once.commands[0] is command
+    copy = keeping.commands[0]  # a robot that may keep it gets its own arrays
+    assert copy is not command and copy.tau_ff is not command.tau_ff
+    assert np.array_equal(copy.tau_ff, command.tau_ff)
+    # The robot is judged again when it is replaced (a test swaps in a faulty one).
+    mapped = MappedRobot(at_once)
+    mapped.write_command(command)
+    mapped.robot = keeping
+    mapped.write_command(command)
+    assert keeping.commands[-1] is not command and at_once.commands[-1] is command
+    assert "AppliesCommandAtOnce" in actions.robot.__all__

@@ -14,6 +14,7 @@ if TYPE_CHECKING:
     from actions.robot.loop_behaviours import LoopBehaviours
     from actions.robot.robot_capabilities import (
         AnswersTicks,
+        AppliesCommandAtOnce,
         CountsSkips,
         DescribesStream,
         ReportsStats,
@@ -36,8 +37,9 @@ _EXPORTS = {
     "RobotInterface": "actions.robot.robot_interface",
     "TrueState": "actions.robot.robot_interface",
     "check_robot": "actions.robot.robot_interface",
-    **dict.fromkeys(("AnswersTicks", "CountsSkips", "DescribesStream", "ReportsStats",
-                     "StalenessLimited", "StateWaiting"), "actions.robot.robot_capabilities"),
+    **dict.fromkeys(("AnswersTicks", "AppliesCommandAtOnce", "CountsSkips", "DescribesStream",
+                     "ReportsStats", "StalenessLimited", "StateWaiting"),
+                    "actions.robot.robot_capabilities"),
 }
 
 
@@ -53,7 +55,7 @@ def __dir__() -> list[str]:
     return sorted({*globals(), *_EXPORTS})
 
 
-__all__ = ["AnswersTicks", "ControlLoop", "CountsSkips", "DescribesStream", "LoopBehaviours",
-           "MappedRobot", "ReportsStats", "RobotInterface", "RobotLoop", "Stage", "StageTimes",
-           "StalenessLimited", "StateWaiting", "TickFilter", "TickTimer", "TrueState",
-           "check_robot"]
+__all__ = ["AnswersTicks", "AppliesCommandAtOnce", "ControlLoop", "CountsSkips",
+           "DescribesStream", "LoopBehaviours", "MappedRobot", "ReportsStats", "RobotInterface",
+           "RobotLoop", "Stage", "StageTimes", "StalenessLimited", "StateWaiting", "TickFilter",
+           "TickTimer", "TrueState", "check_robot"]

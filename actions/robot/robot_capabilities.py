@@ -16,11 +16,16 @@ capability is looked up once, when the loop (or its log) is built, not every tic
   (``stale_reason()``), for the fallback's reason.
 - :class:`AnswersTicks`: it knows the robot tick of the state its next command answers.
 - :class:`ReportsStats`: it has figures for a run's report (``stats()``).
+- :class:`AppliesCommandAtOnce`: it applies a command within the call and keeps nothing of
+  it, so the loop hands it the controller's command without a copy.
 """
 
 from __future__ import annotations
 
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from wbc.robot_io.motor_command import MotorCommand
 
 
 @runtime_checkable
@@ -79,3 +84,15 @@ class ReportsStats(Protocol):
 
     def stats(self) -> dict[str, Any]:
         """Its counters and figures, JSON-ready."""
+
+
+@runtime_checkable
+class AppliesCommandAtOnce(Protocol):
+    """A robot that applies a command within the call and keeps no reference to it (a
+    simulator's drivers read its arrays once, then step): :class:`~actions.MappedRobot`
+    hands it the controller's command itself, where any other robot gets a copy it may
+    keep (a delay queue, a wire's send thread)."""
+
+    def apply_command(self, command: MotorCommand) -> None:
+        """:meth:`~actions.robot.robot_interface.RobotInterface.write_command`, the
+        command's arrays read before it returns."""

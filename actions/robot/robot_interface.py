@@ -26,10 +26,12 @@ declares by the protocols of :mod:`actions.robot.robot_capabilities`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol, cast, runtime_checkable
 
 import numpy as np
 
+from actions.robot.robot_capabilities import AppliesCommandAtOnce
 from wbc.core.errors import ConfigurationError
 from wbc.core.validation import as_vector
 from wbc.model.joint_map import JointMap
@@ -222,6 +224,8 @@ class MappedRobot:
                                                  for leg in legs]))
         self._record = SensorRecord.zeros()
         self._true_state_of: object = None  # the robot has_true_state last judged
+        self._apply_of: object = None  # the robot _apply was judged for
+        self._apply: Callable[[MotorCommand], None] | None = None
         self._true_state = False
 
     @property
@@ -294,7 +298,9 @@ class MappedRobot:
         return q, v
 
     def write_command(self, command: MotorCommand) -> None:
-        """A motor command in the description order, sent in the robot's order (a copy).
+        """A motor command in the description order, sent in the robot's order (a copy;
+        ``command`` itself to a robot in the description's order that applies it at once,
+        :class:`~actions.robot.robot_capabilities.AppliesCommandAtOnce`).
 
         Raises:
             OrderMismatchError: ``command`` is in another joint order (already the robot's).
@@ -304,8 +310,16 @@ class MappedRobot:
                 DESCRIPTION_ORDERS, what="write_command(command)", legs=False,
                 fix="pass the controller's command as it is (the description's order): "
                     "this robot maps it to its own by name")
+        robot = self.robot
+        if robot is not self._apply_of:  # once per robot: a protocol's isinstance costs
+            self._apply_of = robot       # microseconds, and the tick writes every time
+            self._apply = (robot.apply_command if isinstance(robot, AppliesCommandAtOnce)
+                           else None)
         if self._same_order:
-            self.robot.write_command(command.copy())
+            if self._apply is not None:  # applied before it returns: no copy to keep
+                self._apply(command)
+            else:
+                robot.write_command(command.copy())
         else:
             self.robot.write_command(command.reordered(self.joint_map.index,
                                                        orders=self.robot_orders))

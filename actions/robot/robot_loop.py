@@ -25,8 +25,8 @@ from wbc.core.errors import ConfigurationError
 from wbc.core.validation import check_name
 from wbc.estimation.estimators import make_estimator
 from wbc.estimation.state_estimator import EstimatorBase
-from wbc.model.description import JOINT_NAMES, LEGS, Go2Description
-from wbc.robot_io.motor_command import within_effort_limits
+from wbc.model.description import JOINT_NAMES, Go2Description
+from wbc.robot_io.motor_command import command_and_torque_fine, within_effort_limits
 from wbc.robot_io.sensor_record import SensorRecord
 
 if TYPE_CHECKING:
@@ -84,7 +84,6 @@ class RobotLoop:
         self.runner: ActionRunner
         self.context, self.runner = behaviours.serve(controller, busy_policy=busy_policy)
         self.runner.set_spinner(self.spin_once)
-        self._bounds = np.zeros(len(LEGS))
         self.estimator: EstimatorBase | None = None
         #: The loop's mode and its fallback while the state is not trustworthy.
         self.fallback = StateFallback(self, fallback)
@@ -220,8 +219,9 @@ class RobotLoop:
                 return estimator.estimate.q.copy(), estimator.estimate.v.copy()
             estimate = estimator.reset(record)
         else:
-            self.controller.schedule.normal_force_bounds(self._bounds)
-            estimate = estimator.update(record, self._bounds)
+            bounds = estimator.schedule_input  # filled in place: update copies nothing
+            self.controller.schedule.normal_force_bounds(bounds)
+            estimate = estimator.update(record, bounds)
         return estimate.q.copy(), estimate.v.copy()
 
     def true_state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -241,6 +241,12 @@ class RobotLoop:
         beyond the effort limits (see :meth:`wbc.robot_io.motor_command.MotorCommand.problems`).
         """
         limit = self._effort_limit
+        try:  # float64 vectors, every check passed: one compiled call
+            if command_and_torque_fine(out.q_des, out.dq_des, out.kp, out.kd, out.tau_ff,
+                                       out.tau, limit):
+                return out
+        except TypeError:  # not float64 vectors: the checks below say what is wrong
+            pass
         problem = out.problems(limit, JOINT_NAMES)
         if not problem and not within_effort_limits(out.tau, limit):
             problem = "tau: non-finite or beyond the effort limits"

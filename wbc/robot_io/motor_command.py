@@ -43,6 +43,16 @@ def _within(values, limit):
     return math.isfinite(total)
 
 
+@numba.njit(numba.boolean(_VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR, _VECTOR),
+            cache=True)
+def command_and_torque_fine(q_des, dq_des, kp, kd, tau_ff, tau,
+                            effort_limit):  # pragma: no cover - compiled
+    """:func:`command_fine` and ``tau`` within the limits (:func:`within_effort_limits`) in
+    one compiled call: a control loop's check of a command before it sends it."""
+    return (command_fine(q_des, dq_des, kp, kd, tau_ff, effort_limit)
+            and _within(tau, effort_limit))
+
+
 def within_effort_limits(tau: np.ndarray, effort_limit: np.ndarray) -> bool:
     """Whether ``tau`` [N m] has the limits' shape, is finite and is inside ``+-effort_limit``.
 
