@@ -30,13 +30,14 @@ How each signal is made, every control period of ``dt`` seconds:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
 
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
+from wbc.core.compiled_program import CompiledProgram
 from wbc.core.errors import ConfigurationError
 from wbc.core.kernel_records import parameter_record
 from wbc.core.quaternion_kernels import quat_exp, quat_multiply, quat_normalize, rotate_inverse
@@ -229,6 +230,21 @@ def _sample(plant, sites, params, drift, noise, out):  # pragma: no cover - comp
         feet[i] = count
 
 
+#: The per-sample numbers :func:`_sample_from_header` reads from its header: the time since
+#: the previous sample [s], whether there was one (1 or 0), the noise block's row.
+_DT, _HAS_PREVIOUS, _ROW = 0, 1, 2
+
+
+@numba.njit(cache=True)
+def _sample_from_header(header, plant, sites, params, drift, noise_block,
+                        out):  # pragma: no cover - compiled
+    """:func:`_sample`, ``dt``, ``has_previous`` and the noise row read from ``header`` (not
+    ``plant``'s): the form of the one call whose arrays come from a table of addresses."""
+    reading = PlantReading(plant.qpos, plant.qvel, plant.actuator_force, plant.touch,
+                           header[_DT], header[_HAS_PREVIOUS] != 0.0)
+    _sample(reading, sites, params, drift, noise_block[int(header[_ROW])], out)
+
+
 class SimulatedSensors:
     """Samples the plant's sensors into a :class:`wbc.SensorRecord`, seeded.
 
@@ -264,13 +280,13 @@ class SimulatedSensors:
         from wbc.model.leg_kinematics import LegKinematics
 
         self._imu_offset = LegKinematics(sim.description).imu_offset.copy()
+        self._qpos, self._qvel = sim.qpos, sim.qvel  # live views: MjData's arrays never move
+        self._torque, self._touch = sim.actuator_torque(), sim.foot_normal_forces()
         self._params = sampler_params(model)
         self._sites = SensorSites(self._joint_qpos, self._joint_dof, self._leg_rows,
                                   self._imu_offset)
-        # The compiled overload, bound: no dispatcher typing of the groups every sample (any
-        # float64 vectors: the plant's and the record's, 'A' layout). Its entry point
-        # unboxes a tuple by position: the per-sample groups go as plain tuples in their
-        # fields' order (building the NamedTuples every sample costs more than the call).
+        # The compiled overload (no dispatcher typing each sample; float64 vectors, 'A'
+        # layout): its entry point takes a per-sample group as a plain tuple, field by field.
         vector = numba.float64[:]
         self._compiled = _sample.compile((
             numba.types.NamedTuple((vector, vector, vector, vector, numba.float64,
@@ -299,6 +315,26 @@ class SimulatedSensors:
         # Judged once here: comparing the model with the exact preset costs tens of us.
         self._exact = m.is_exact
         self.ticks = 0
+        # The one compiled call, its record, that record's arrays, the last record sampled.
+        self._program: Callable[[], None] | None = None
+        self._program_record = self._seen_record = None
+        self._program_arrays: tuple[np.ndarray, ...] = ()
+        self._header = np.zeros(3)  # what the call reads at _DT, _HAS_PREVIOUS, _ROW
+
+    def _bind_program(self, record: SensorRecord) -> None:
+        """The sample as one compiled call that reads every array, ``record``'s too, from a
+        table of addresses (:class:`wbc.core.compiled_program.CompiledProgram`): one array
+        unboxed a sample, not 21. A record of other than float64 vectors keeps the plain call."""
+        arrays = (record.imu_quaternion_wxyz, record.gyroscope_rad_s, record.accelerometer_m_s2,
+                  record.q, record.dq, record.tau_est, record.foot_force)
+        if not all(type(a) is np.ndarray and a.dtype == np.float64 and a.ndim == 1
+                   and a.flags.c_contiguous for a in arrays):
+            return
+        plant = PlantReading(self._qpos, self._qvel, self._torque, self._touch, 0.0, False)
+        program = CompiledProgram([(_sample_from_header, (
+            self._header, plant, self._sites, self._params, self._drift, self._noise,
+            RecordArrays(*arrays)))])
+        self._program, self._program_record, self._program_arrays = program.run, record, arrays
 
     def _settled_attitude(self) -> np.ndarray:
         """Where the robot's attitude filter has settled while the robot stood still before
@@ -335,12 +371,27 @@ class SimulatedSensors:
             if not self._exact:
                 self._rng.standard_normal(out=self._noise)
             self._row = 0
-        self._compiled(
-            (sim.qpos, sim.qvel, sim.actuator_torque(), sim.foot_normal_forces(),
-             now - self._last_s, self._has_previous),  # a PlantReading
-            self._sites, self._params, self._drift, self._noise_rows[self._row],
-            (record.imu_quaternion_wxyz, record.gyroscope_rad_s, record.accelerometer_m_s2,
-             record.q, record.dq, record.tau_est, record.foot_force))  # a RecordArrays
+        arrays = self._program_arrays
+        if (record is self._program_record and record.imu_quaternion_wxyz is arrays[0]
+                and record.gyroscope_rad_s is arrays[1]
+                and record.accelerometer_m_s2 is arrays[2] and record.q is arrays[3]
+                and record.dq is arrays[4] and record.tau_est is arrays[5]
+                and record.foot_force is arrays[6]):
+            header = self._header  # the record's arrays are written where the table points
+            header[_DT] = now - self._last_s
+            header[_HAS_PREVIOUS] = self._has_previous
+            header[_ROW] = self._row
+            self._program()  # type: ignore[misc]
+        else:  # a PlantReading, ..., a RecordArrays
+            self._compiled((self._qpos, self._qvel, self._torque, self._touch,
+                            now - self._last_s, self._has_previous), self._sites, self._params,
+                           self._drift, self._noise_rows[self._row],
+                           (record.imu_quaternion_wxyz, record.gyroscope_rad_s,
+                            record.accelerometer_m_s2, record.q, record.dq, record.tau_est,
+                            record.foot_force))
+            if record is self._seen_record:  # the same record again: one call from now on
+                self._bind_program(record)
+            self._seen_record = record
         self._row += 1
         self._has_previous = True
         self._last_s = now

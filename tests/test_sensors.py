@@ -235,3 +235,28 @@ def test_a_robot_in_the_sdk_order_reports_in_its_orders_and_is_mapped_by_name():
             assert raw.foot_force[0] == pytest.approx(10.0 + 2.5 * sim.foot_normal_forces()[fr])
     np.testing.assert_array_equal(mapped[0].q, mapped[1].q)
     np.testing.assert_array_equal(mapped[0].foot_force, mapped[1].foot_force)
+
+
+def test_the_one_call_sample_is_the_plain_sample_bit_for_bit():
+    """A record sampled again is filled by one compiled call reading its arrays from a table
+    of addresses; a new record each time by the call that unboxes them: the same values,
+    across the noise block's refills, and a replaced array is the one written."""
+    plants = Go2Simulator(), Go2Simulator()
+    one, each = SimulatedSensors(plants[0]), SimulatedSensors(plants[1])
+    buffer = SensorRecord.zeros()
+    for i in range(40):
+        fresh = SensorRecord.zeros()
+        one.sample(buffer)
+        each.sample(fresh)
+        for name in ("imu_quaternion_wxyz", "gyroscope_rad_s", "accelerometer_m_s2", "q", "dq",
+                     "tau_est", "foot_force"):
+            assert np.array_equal(getattr(buffer, name), getattr(fresh, name)), (i, name)
+        assert (buffer.stamp_s, buffer.tick) == (fresh.stamp_s, fresh.tick)
+        for sim in plants:
+            sim.step_command(held(sim))
+    assert one._program_record is buffer and each._program_record is None
+    old = buffer.q
+    buffer.q = np.zeros(12)
+    one.sample(buffer)
+    each.sample(fresh)
+    assert np.array_equal(buffer.q, fresh.q) and not np.array_equal(old, buffer.q)

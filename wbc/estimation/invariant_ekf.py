@@ -70,6 +70,7 @@ from wbc.estimation.invariant_ekf_kernels import (
     WORK_SHAPES,
     InvariantArrays,
     _estimate,
+    _estimate_from_header,
     _start,
 )
 from wbc.model.description import Go2Description
@@ -173,6 +174,7 @@ class InvariantEkf(EstimatorBase):
 
     config_class = InvariantEkfConfig
     kernel = _estimate
+    header_kernel = staticmethod(_estimate_from_header)
     start_kernel = staticmethod(_start)
     work_shapes = WORK_SHAPES
     quaternion_note = "not used after the start (the orientation is the filter's own)"

@@ -45,6 +45,7 @@ from wbc.estimation.shared_kernels import (
     check_sample,
     foot_motion,
     legs_and_contacts,
+    sample_of,
     start_pose,
     write_outputs,
 )
@@ -225,6 +226,17 @@ def _estimate(sample, schedule, params, legs, filter_state, sensors, outputs,
                   x[_VEL + 1], x[_VEL + 2], imu_offset, outputs, w)
     account_trust(flags, dt, sensors.clock)
     return flags
+
+
+@numba.njit(cache=True)
+def _estimate_from_header(header, readings, schedule, params, legs, filter_state, sensors,
+                          outputs, work):  # pragma: no cover - compiled
+    """:func:`_estimate` on the sample of ``header`` and ``readings``
+    (:func:`~wbc.estimation.shared_kernels.sample_of`): the invariant EKF's tick as one compiled
+    call whose arrays are read from a table of addresses
+    (:class:`wbc.core.compiled_program.CompiledProgram`), the sample's scalars from ``header``."""
+    return _estimate(sample_of(header, readings), schedule, params, legs, filter_state,
+                     sensors, outputs, work)
 
 
 @numba.njit(cache=True)

@@ -37,6 +37,25 @@ class Sample(NamedTuple):
     foot_force: np.ndarray
 
 
+#: A sample's scalars as the one compiled call reads them (``header``, :data:`HEADER_SIZE`):
+#: whether it came (1 or 0), its counter and its stamp [s].
+HEADER_FRESH, HEADER_TICK, HEADER_STAMP_S = 0, 1, 2
+HEADER_SIZE = 3
+
+
+class Readings(NamedTuple):
+    """A :class:`Sample`'s arrays alone (a :class:`wbc.SensorRecord`'s): with a header of
+    its scalars, the form in which the estimator's one compiled call, whose arrays are read
+    from a table of addresses, takes the sample."""
+
+    quaternion: np.ndarray
+    gyroscope: np.ndarray
+    accelerometer: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    foot_force: np.ndarray
+
+
 class Legs(NamedTuple):
     """The legs' model and kinematics (:class:`LegKinematics`' arrays: the model, then the
     outputs every tick refills)."""

@@ -57,6 +57,7 @@ from wbc.estimation.state_estimator_kernels import (
     WORK_SHAPES,
     KalmanArrays,
     _estimate,
+    _estimate_from_header,
     _start,
 )
 from wbc.model.description import Go2Description
@@ -83,6 +84,7 @@ class LinearKalmanFilter(EstimatorBase):
 
     config_class = EstimatorConfig
     kernel = _estimate
+    header_kernel = staticmethod(_estimate_from_header)
     start_kernel = staticmethod(_start)
     work_shapes = WORK_SHAPES
     # Its yaw alignment to the IMU's world is taken from the first quaternion.

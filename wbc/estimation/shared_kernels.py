@@ -18,6 +18,10 @@ from wbc.estimation.kernel_groups import (
     CLOCK_STAMP_S,
     CLOCK_TICK,
     CLOCK_UNTRUSTED_S,
+    HEADER_FRESH,
+    HEADER_STAMP_S,
+    HEADER_TICK,
+    Sample,
 )
 from wbc.estimation.state_estimate import (
     ACCEL_BAD,
@@ -45,6 +49,15 @@ from wbc.model.leg_kinematics import leg_kinematics
 CAL_OFFSET, CAL_GAIN, CAL_WEIGHT = 0, 4, 8
 CAL_BAD_S, CAL_GOOD_S, CAL_ACTIVE, CAL_SUM = 9, 10, 11, 12
 CAL_SIZE = 13
+
+
+@numba.njit(cache=True)
+def sample_of(header, readings):  # pragma: no cover - compiled
+    """The :class:`~wbc.estimation.kernel_groups.Sample` of a header (``HEADER_*``: fresh
+    as 1 or 0, tick, stamp [s]) and its :class:`~wbc.estimation.kernel_groups.Readings`."""
+    return Sample(header[HEADER_FRESH] != 0.0, header[HEADER_TICK], header[HEADER_STAMP_S],
+                  readings.quaternion, readings.gyroscope, readings.accelerometer, readings.q,
+                  readings.dq, readings.foot_force)
 
 
 @numba.njit(cache=True)
