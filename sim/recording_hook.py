@@ -70,7 +70,8 @@ class RecordingHook:
         walking, walk = walking_motion(loop), None
         if walking is not None:
             walk = WalkSample(
-                commanded=np.array(walking.commanded_velocity), measured=heading_velocities(q, v),
+                commanded=np.array(walking.commanded_velocity),
+                measured=np.array(walking.measured_velocity),
                 measured_true=heading_velocities(truth[0], truth[1]),
                 swing_legs=tuple(walking.swing_legs),
                 loaded=tuple(bool(f > LOADED_FORCE_N) for f in forces[:, 2]))

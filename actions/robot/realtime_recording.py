@@ -10,6 +10,7 @@ thread (a full pipe drops the snapshot, counted).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,6 +22,8 @@ from wbc.model.description import LEGS
 
 if TYPE_CHECKING:
     from actions.robot.realtime_loop import RealtimeLoop
+    from actions.robot.robot_loop import RobotLoop
+    from actions.robot.run_recording import RecordedWalking
 
 _TICK = SERIES.index("tick")
 
@@ -31,10 +34,15 @@ class RealtimeRecording:
 
     Args:
         recording: Where the snapshots go.
+        walking_of: The walking motion the loop's goal runs now, ``None`` when nothing walks
+            (``sim.gait_view.walking_motion``); its commanded and measured velocity and swing
+            legs go on ``/walking``. Default: none recorded.
     """
 
-    def __init__(self, recording: RecordingProcess):
+    def __init__(self, recording: RecordingProcess, *,
+                 walking_of: Callable[[RobotLoop], RecordedWalking | None] | None = None):
         self.recording = recording
+        self._walking_of = walking_of
         self._targets: FootTargets | None = None
         self._declared = False
 
@@ -75,8 +83,15 @@ class RealtimeRecording:
         if estimator is not None:
             frame.estimate_contact[:] = estimator.estimate.contact
         goals = loop.runner.active_goals()
+        walking = None if self._walking_of is None or not goals else self._walking_of(loop)
+        swing: tuple[bool, ...] = ()
+        if walking is not None:
+            frame.commanded_velocity[:] = walking.commanded_velocity
+            frame.measured_velocity[:] = walking.measured_velocity
+            swing = tuple(leg in walking.swing_legs for leg in LEGS)
         self.recording.capture_frame(frame.payload(
             stance=stance, qp_ok=out is not None and bool(out.ok), missed=rt.missed,
             estimate=estimator is not None, truth=False,
             status="DAMPING" if out is None else out.status.name,
-            phase=(goals[0].server.action_name if goals else rt.rest.phase.name.lower())))
+            phase=(goals[0].server.action_name if goals else rt.rest.phase.name.lower()),
+            walking=walking is not None, swing=swing))

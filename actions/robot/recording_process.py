@@ -3,7 +3,7 @@
 
 The loop's thread only copies its snapshot into one fixed-size frame (:class:`SnapshotFrame`:
 a preallocated float buffer and its few names) and writes it, without blocking, into a pipe
-whose kernel buffer is the bounded queue (826 snapshots, 16 s at 50 Hz): a full pipe drops
+whose kernel buffer is the bounded queue (796 snapshots, 16 s at 50 Hz): a full pipe drops
 the snapshot, counted. The child process unpacks the frames and
 does everything else (the messages, the MCAP chunks' zstd, the file's writes, the WebSocket
 server) with its own interpreter, so none of it runs in the loop's thread or holds its GIL.
@@ -30,9 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from actions.robot.run_recording import DEFAULT_RATE_HZ, Snapshot
+from actions.robot.run_recording import DEFAULT_RATE_HZ, Snapshot, WalkSample
 from actions.robot.tick_stats import SERIES
 from wbc.core.errors import ConfigurationError
+from wbc.model.description import LEGS
 
 #: The pipe's kernel buffer [bytes] asked for (Linux's default ceiling for a user,
 #: ``/proc/sys/fs/pipe-max-size``); the default 64 kB is kept where it is refused.
@@ -52,7 +53,7 @@ LINE_BYTES = 3_500
 _FLOATS = (("t_s", 1), ("q", 19), ("v", 18), ("tau", 12), ("foot_target", 12),
            ("tick_us", 1), ("com_margin_m", 1), ("estimate_contact", 4), ("q_true", 19),
            ("v_true", 18), ("force_n", 12), ("foot_position", 12), ("stages_us", len(SERIES)),
-           ("flags", 1))
+           ("commanded_velocity", 3), ("measured_velocity", 3), ("flags", 1))
 _SLICES: dict[str, slice] = {}
 _at = 0
 for _name, _n in _FLOATS:
@@ -65,8 +66,10 @@ _SNAPSHOT, _LINE = b"S", b"L"
 _LENGTH = struct.Struct("!i")  # multiprocessing.Connection's frame header
 #: A snapshot frame's bytes on the pipe (at most PIPE_BUF, 4096, so a write is all or none).
 FRAME_BYTES = _LENGTH.size + 1 + 8 * FRAME_FLOATS + _TEXT_BYTES
-# flags: bits 0-3 stance FL..RR, 4 qp_ok, 5 missed, 6 an estimate, 7 the simulator's truth
-_QP_OK, _MISSED, _ESTIMATE, _TRUTH = 16, 32, 64, 128
+# flags: bits 0-3 stance FL..RR, 4 qp_ok, 5 missed, 6 an estimate, 7 the simulator's truth,
+# 8 a motion walks, 9-12 its swing legs FL..RR
+_QP_OK, _MISSED, _ESTIMATE, _TRUTH, _WALKING = 16, 32, 64, 128, 256
+_SWING_BIT = 9
 
 
 class SnapshotFrame:
@@ -76,7 +79,9 @@ class SnapshotFrame:
     Views: ``t_s`` (1,) [s], ``q`` (19,), ``v`` (18,), ``tau`` (12,) [N m],
     ``foot_target`` (4, 3) [m], ``tick_us`` (1,), ``com_margin_m`` (1,),
     ``estimate_contact`` (4,), ``q_true`` (19,), ``v_true`` (18,), ``force_n`` (4, 3) [N],
-    ``foot_position`` (4, 3) [m], ``stages_us`` (one per :data:`SERIES`; NaN: none).
+    ``foot_position`` (4, 3) [m], ``stages_us`` (one per :data:`SERIES`; NaN: none),
+    ``commanded_velocity`` and ``measured_velocity`` (3,) a walking motion's, heading frame
+    [m/s, m/s, rad/s] (read only when :meth:`payload` is told ``walking``).
     """
 
     def __init__(self) -> None:
@@ -90,14 +95,20 @@ class SnapshotFrame:
         self.force_n = view["force_n"].reshape(4, 3)
         self.foot_position = view["foot_position"].reshape(4, 3)
         self.stages_us, self._flags = view["stages_us"], view["flags"]
+        self.commanded_velocity = view["commanded_velocity"]
+        self.measured_velocity = view["measured_velocity"]
 
     def payload(self, *, stance: Sequence[bool], qp_ok: bool, missed: bool, estimate: bool,
-                truth: bool, status: str, phase: str, raised_leg: str = "") -> bytes:
-        """The frame's bytes: the floats as written, whether the estimate's and the truth's
-        fields hold anything, and the names."""
+                truth: bool, status: str, phase: str, raised_leg: str = "",
+                walking: bool = False, swing: Sequence[bool] = ()) -> bytes:
+        """The frame's bytes: the floats as written, whether the estimate's, the truth's and
+        the walking motion's fields hold anything, the swing legs (``LEGS`` order), and the
+        names."""
         flags = sum(1 << k for k, leg_stance in enumerate(stance) if leg_stance)
         flags |= ((_QP_OK if qp_ok else 0) | (_MISSED if missed else 0)
-                  | (_ESTIMATE if estimate else 0) | (_TRUTH if truth else 0))
+                  | (_ESTIMATE if estimate else 0) | (_TRUTH if truth else 0)
+                  | (_WALKING if walking else 0))
+        flags |= sum(1 << (_SWING_BIT + k) for k, in_swing in enumerate(swing) if in_swing)
         self._flags[0] = flags
         text = "\x1f".join((status, phase, raised_leg)).encode()[:_TEXT_BYTES]
         return _SNAPSHOT + self.floats.tobytes() + text.ljust(_TEXT_BYTES, b"\0")
@@ -123,9 +134,14 @@ def pack_snapshot(s: Snapshot, frame: SnapshotFrame) -> bytes:
         frame.force_n[:] = s.force_n
         frame.foot_position[:] = s.foot_position
     frame.stages_us[:] = [s.stages_us.get(name, math.nan) for name in SERIES]
+    walk = s.walk
+    if walk is not None:
+        frame.commanded_velocity[:] = walk.commanded
+        frame.measured_velocity[:] = walk.measured
     return frame.payload(stance=s.stance, qp_ok=s.qp_ok, missed=s.missed, estimate=estimate,
                          truth=truth, status=s.status, phase=s.phase,
-                         raised_leg=s.raised_leg)
+                         raised_leg=s.raised_leg, walking=walk is not None,
+                         swing=() if walk is None else [leg in walk.swing_legs for leg in LEGS])
 
 
 def unpack_snapshot(payload: bytes) -> Snapshot:
@@ -152,7 +168,11 @@ def unpack_snapshot(payload: bytes) -> Snapshot:
         force_n=get("force_n", (4, 3)) if truth else None,
         foot_position=get("foot_position", (4, 3)) if truth else None,
         com_margin_m=float(f[_SLICES["com_margin_m"]][0]), raised_leg=leg,
-        missed=bool(flags & _MISSED), stages_us=stages)
+        missed=bool(flags & _MISSED), stages_us=stages,
+        walk=None if not flags & _WALKING else WalkSample(
+            commanded=get("commanded_velocity"), measured=get("measured_velocity"),
+            swing_legs=tuple(leg for k, leg in enumerate(LEGS)
+                             if flags & (1 << (_SWING_BIT + k)))))
 
 
 class RecordingProcess:

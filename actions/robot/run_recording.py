@@ -15,6 +15,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 from foxglove.messages import (
@@ -60,14 +61,24 @@ _POLYGON_COLOUR = Color(r=0.2, g=0.8, b=0.2, a=1.0)
 _NEWTONS_PER_M = 200.0  # a force arrow's length: 1 m per 200 N
 
 
+class RecordedWalking(Protocol):
+    """What a recording reads of a walking motion (``wbc.locomotion.Walking`` has it): the
+    legs in swing, and its commanded and measured velocity (3,) in the heading frame."""
+
+    swing_legs: tuple[str, ...]
+    commanded_velocity: np.ndarray
+    measured_velocity: np.ndarray
+
+
 @dataclass(slots=True)
 class WalkSample:
     """What a walking motion adds to a snapshot (``/walking``), velocities in the base's
     heading frame: forward, lateral [m/s] and the yaw rate [rad/s], counter-clockwise.
 
     ``commanded`` (3,) the motion's commanded velocity (the command after its ramps and
-    envelope: what the trot follows), ``measured`` (3,) the controller's state's (the
-    estimate), ``measured_true`` (3,) the simulator's truth (``None`` on a real robot);
+    envelope: what the trot follows), ``measured`` (3,) the motion's measured velocity (its
+    CoM's, from the controller's state: what the trot tracks), ``measured_true`` (3,) the
+    simulator's truth, the base's (``None`` on a real robot);
     ``swing_legs`` the legs the gait has in the air; ``loaded`` per leg (``LEGS`` order)
     whether the simulator finds it loaded (``None`` on a real robot).
     """

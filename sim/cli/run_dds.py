@@ -218,8 +218,9 @@ def run_dds(args: argparse.Namespace, *, stream: IO[str] | None = None) -> int:
             "estimator": args.estimator, "dry_run": str(args.dry_run)})
         if recording is not None:
             from actions.robot.realtime_recording import RealtimeRecording
+            from sim.gait_view import walking_motion
 
-            rt.callbacks.append(RealtimeRecording(recording))
+            rt.callbacks.append(RealtimeRecording(recording, walking_of=walking_motion))
             if recording.port is not None:
                 say(f"foxglove: serving ws://127.0.0.1:{recording.port}")
         calibration = None
