@@ -6,6 +6,7 @@ import pytest
 from wbc import WholeBodyController
 from wbc.controller.controller_config import ControllerConfig, ShapingSettings
 from wbc.controller.motor_command_shaper import MotorCommandShaper, joint_types
+from wbc.core.compiled_program import CompiledProgram
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import JOINT_NAMES, Go2Description
 
@@ -78,3 +79,41 @@ def test_controller_output_is_a_motor_command_with_swing_gains_on_a_raised_leg(d
 def test_gains_and_known_friction_are_validated(field, value, message):
     with pytest.raises(ConfigurationError, match=message):
         ControllerConfig(shaping={field: value})
+
+
+def _compiled_shaper(**overrides):
+    """A shaper, its compiled step run as a program, and the input arrays it reads."""
+    s = shaper(**overrides)
+    inputs = [np.zeros(12) for _ in range(4)]  # q, dq, qdd, tau_qp: written in place
+    return s, CompiledProgram([s.compiled_step(*inputs)]), inputs
+
+
+def test_the_compiled_step_writes_what_shape_returns_through_stance_and_retune():
+    settings = {"known_joint_damping": (0.1, 0.2, 0.3), "known_joint_friction": (0.25, 0.2, 1.0),
+                "stance_leak_time_s": 0.05, "swing_leak_time_s": 0.0}
+    plain, (compiled, program, inputs) = shaper(**settings), _compiled_shaper(**settings)
+    untuned = shaper(**settings)
+    rng = np.random.default_rng(3)
+    fr = Go2Description().leg_joint_indices("FR")
+    for tick in range(40):
+        if tick == 10:
+            for s in (plain, compiled, untuned):
+                s.set_stance(fr, False)
+        if tick == 20:  # a walk's retune: other bounds and friction scale, in place
+            for s in (plain, compiled):
+                s.retune(ShapingSettings(**settings, reference_position_bound_rad=0.01,
+                                         friction_velocity_scale_rad_s=0.2))
+        values = [rng.normal(size=12), rng.normal(size=12), 50 * rng.normal(size=12),
+                  rng.uniform(-5, 5, 12)]
+        for array, value in zip(inputs, values):
+            array[:] = value
+        expected = plain.shape(*values)
+        compiled.prepare(values[0], values[1])
+        program.run()
+        got = compiled.command()
+        for name, row in zip(("q_des", "dq_des", "kp", "kd", "tau_ff", "tau"), got):
+            np.testing.assert_array_equal(row, expected[name], err_msg=f"tick {tick} {name}")
+        reference = untuned.shape(*values)
+        if tick >= 20:  # the retune changed the command (so the check above can fail)
+            assert not np.array_equal(reference["tau_ff"], expected["tau_ff"])
+    assert not np.shares_memory(got[0], compiled.command_rows)  # the caller's own arrays

@@ -336,6 +336,21 @@ def test_reset_prepares_the_raised_foot_layouts_without_changing_any_tick(model,
     assert len(prepared.builder._plans) == 7  # the raise used a prepared layout
 
 
+def test_the_command_shaped_inside_the_compiled_solve_is_the_python_paths(model, standing):
+    compiled = WholeBodyController()
+    compiled.reset(standing)
+    python = WholeBodyController()
+    python.reset(standing)
+    python.builder.solve = lambda backend: None  # solve, accept and shape in Python
+    for a, b in zip(*_lift_in_lockstep([compiled, python], model, standing)):
+        assert a.ok and b.ok
+        for field in ("q_des", "dq_des", "kp", "kd", "tau_ff", "tau", "qdd", "forces"):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)
+        assert a.task_errors == b.task_errors and list(a.task_errors) == list(b.task_errors)
+    assert "FR_foot" in a.task_errors and a.kp[3] == compiled.config.shaping.swing_kp
+    assert not np.shares_memory(a.tau, compiled.motor.command_rows)
+
+
 def test_torque_limits_changed_after_reset_reach_every_prepared_layout(standing, model):
     c = WholeBodyController()
     c.reset(standing)
