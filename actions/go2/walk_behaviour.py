@@ -258,12 +258,10 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
     def _check_aim(self, now_s: float) -> None:
         """Stop once the goal's duration has passed or its distance is travelled."""
         goal = self.goal
-        if goal.duration_s > 0.0:
-            self._progress = max(self._progress, min(
-                1.0, (now_s - self._walk_start_s) / goal.duration_s))
-        else:
-            self._progress = max(self._progress, min(
-                1.0, self.walking.distance_m / goal.distance_m))
+        progress = ((now_s - self._walk_start_s) / goal.duration_s if goal.duration_s > 0.0
+                    else self.walking.distance_m / goal.distance_m)
+        if not progress <= self._progress:  # it grew (NaN too: done, as min(1, NaN) said)
+            self._progress = progress if progress < 1.0 else 1.0
         if self._progress >= 1.0 - 1e-9:
             self._stop_why = "aim"
             self._request_stop(now_s)
