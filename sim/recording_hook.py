@@ -73,7 +73,7 @@ class RecordingHook:
                 commanded=np.array(walking.commanded_velocity),
                 measured=np.array(walking.measured_velocity),
                 measured_true=heading_velocities(truth[0], truth[1]),
-                swing_legs=tuple(walking.swing_legs),
+                swing_legs=tuple(leg for leg, on in zip(LEGS, stance, strict=True) if not on),
                 loaded=tuple(bool(f > LOADED_FORCE_N) for f in forces[:, 2]))
         recording.capture(Snapshot(
             t_s=loop.context.now_s, q=q, v=v,

@@ -221,9 +221,10 @@ def test_a_live_client_is_told_of_walking_when_it_first_walks_and_receives_it():
 
 
 def test_a_walk_survives_run_dds_s_frame(description):
-    """The frame carries the command, the motion's measured velocity and the swing legs; a
-    robot's run has no truth to add."""
+    """The frame carries the command and the motion's measured velocity; the swing legs are
+    the schedule's legs out of stance; a robot's run has no truth to add."""
     s = snapshot(0.5, description.pose("standing"), truth=False)
+    s.stance = (False, True, True, False)
     s.walk = WalkSample(commanded=np.array([0.3, -0.1, 0.4]),
                         measured=np.array([0.28, -0.09, 0.41]), swing_legs=("FL", "RR"))
     back = unpack_snapshot(pack_snapshot(s, SnapshotFrame()))

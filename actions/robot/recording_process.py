@@ -67,9 +67,8 @@ _LENGTH = struct.Struct("!i")  # multiprocessing.Connection's frame header
 #: A snapshot frame's bytes on the pipe (at most PIPE_BUF, 4096, so a write is all or none).
 FRAME_BYTES = _LENGTH.size + 1 + 8 * FRAME_FLOATS + _TEXT_BYTES
 # flags: bits 0-3 stance FL..RR, 4 qp_ok, 5 missed, 6 an estimate, 7 the simulator's truth,
-# 8 a motion walks, 9-12 its swing legs FL..RR
+# 8 a motion walks
 _QP_OK, _MISSED, _ESTIMATE, _TRUTH, _WALKING = 16, 32, 64, 128, 256
-_SWING_BIT = 9
 
 
 class SnapshotFrame:
@@ -100,15 +99,13 @@ class SnapshotFrame:
 
     def payload(self, *, stance: Sequence[bool], qp_ok: bool, missed: bool, estimate: bool,
                 truth: bool, status: str, phase: str, raised_leg: str = "",
-                walking: bool = False, swing: Sequence[bool] = ()) -> bytes:
+                walking: bool = False) -> bytes:
         """The frame's bytes: the floats as written, whether the estimate's, the truth's and
-        the walking motion's fields hold anything, the swing legs (``LEGS`` order), and the
-        names."""
+        the walking motion's fields hold anything, and the names."""
         flags = sum(1 << k for k, leg_stance in enumerate(stance) if leg_stance)
         flags |= ((_QP_OK if qp_ok else 0) | (_MISSED if missed else 0)
                   | (_ESTIMATE if estimate else 0) | (_TRUTH if truth else 0)
                   | (_WALKING if walking else 0))
-        flags |= sum(1 << (_SWING_BIT + k) for k, in_swing in enumerate(swing) if in_swing)
         self._flags[0] = flags
         text = "\x1f".join((status, phase, raised_leg)).encode()[:_TEXT_BYTES]
         return _SNAPSHOT + self.floats.tobytes() + text.ljust(_TEXT_BYTES, b"\0")
@@ -140,8 +137,7 @@ def pack_snapshot(s: Snapshot, frame: SnapshotFrame) -> bytes:
         frame.measured_velocity[:] = walk.measured
     return frame.payload(stance=s.stance, qp_ok=s.qp_ok, missed=s.missed, estimate=estimate,
                          truth=truth, status=s.status, phase=s.phase,
-                         raised_leg=s.raised_leg, walking=walk is not None,
-                         swing=() if walk is None else [leg in walk.swing_legs for leg in LEGS])
+                         raised_leg=s.raised_leg, walking=walk is not None)
 
 
 def unpack_snapshot(payload: bytes) -> Snapshot:
@@ -171,8 +167,7 @@ def unpack_snapshot(payload: bytes) -> Snapshot:
         missed=bool(flags & _MISSED), stages_us=stages,
         walk=None if not flags & _WALKING else WalkSample(
             commanded=get("commanded_velocity"), measured=get("measured_velocity"),
-            swing_legs=tuple(leg for k, leg in enumerate(LEGS)
-                             if flags & (1 << (_SWING_BIT + k)))))
+            swing_legs=tuple(leg for k, leg in enumerate(LEGS) if not flags & (1 << k))))
 
 
 class RecordingProcess:

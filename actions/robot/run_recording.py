@@ -62,10 +62,9 @@ _NEWTONS_PER_M = 200.0  # a force arrow's length: 1 m per 200 N
 
 
 class RecordedWalking(Protocol):
-    """What a recording reads of a walking motion (``wbc.locomotion.Walking`` has it): the
-    legs in swing, and its commanded and measured velocity (3,) in the heading frame."""
+    """What a recording reads of a walking motion (``wbc.locomotion.Walking`` has it): its
+    commanded and measured velocity (3,) in the heading frame."""
 
-    swing_legs: tuple[str, ...]
     commanded_velocity: np.ndarray
     measured_velocity: np.ndarray
 
@@ -79,7 +78,8 @@ class WalkSample:
     envelope: what the trot follows), ``measured`` (3,) the motion's measured velocity (its
     CoM's, from the controller's state: what the trot tracks), ``measured_true`` (3,) the
     simulator's truth, the base's (``None`` on a real robot);
-    ``swing_legs`` the legs the gait has in the air; ``loaded`` per leg (``LEGS`` order)
+    ``swing_legs`` the legs out of stance in the controller's contact schedule (the gait's
+    swing legs, as the snapshot's ``stance`` has them); ``loaded`` per leg (``LEGS`` order)
     whether the simulator finds it loaded (``None`` on a real robot).
     """
 
