@@ -130,3 +130,23 @@ def test_late_touchdown_keeps_lowering_and_holds_the_clock(controller):
     assert states[late[-1] + 1] == "STANCE"
     # It went late at the end of its swing, not before (0.04 s unloading, 0.225 s swing).
     assert late[0] * controller.control_period_s == pytest.approx(0.265, abs=3e-3)
+
+
+def test_a_non_finite_reference_is_refused_not_written(controller):
+    # The compiled tick writes the tasks' references only after their setters' checks: a
+    # non-finite CoM or swing-foot target is left unwritten, and the setter's error raised.
+    q = standing(controller)
+    walking = Walking(controller)
+    walking.start(0.0)
+    end = run(walking, controller, q, 0.06)  # FR and RL in the air
+    assert walking.swing_legs == ("FR", "RL")
+    foot = controller.foot_tasks["FR"].reference.copy()
+    walking._starts[1, 0] = np.nan  # FR's lift-off point: its path is not finite
+    with pytest.raises(ConfigurationError, match="FR_foot target"):
+        walking.advance(end)
+    np.testing.assert_array_equal(controller.foot_tasks["FR"].reference, foot)
+    com = controller.com_task.reference.copy()
+    walking._com_ref[1] = np.inf
+    with pytest.raises(ConfigurationError, match="ComTask.target"):
+        walking.advance(end + 0.001)
+    np.testing.assert_array_equal(controller.com_task.reference, com)
