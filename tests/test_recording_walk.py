@@ -44,6 +44,7 @@ def schema_of(path: Path, topic: str) -> str | None:
     """The schema name of ``topic`` in the file's summary (``None``: no such channel)."""
     with path.open("rb") as f:
         summary = make_reader(f).get_summary()
+    assert summary is not None
     return next((summary.schemas[c.schema_id].name for c in summary.channels.values()
                  if c.topic == topic), None)
 
@@ -179,6 +180,7 @@ def test_a_live_client_is_told_of_walking_when_it_first_walks_and_receives_it():
     import asyncio
 
     import websockets
+    from websockets.typing import Subprotocol
 
     from tests.test_recording_live import SUBPROTOCOL
 
@@ -189,7 +191,8 @@ def test_a_live_client_is_told_of_walking_when_it_first_walks_and_receives_it():
 
     async def client() -> tuple[str, dict]:
         async with websockets.connect(f"ws://127.0.0.1:{channels.port}",
-                                      subprotocols=[SUBPROTOCOL], max_size=None) as ws:
+                                      subprotocols=[Subprotocol(SUBPROTOCOL)],
+                                      max_size=None) as ws:
             async def next_json(op: str) -> dict:
                 while True:
                     frame = await asyncio.wait_for(ws.recv(), 10.0)
