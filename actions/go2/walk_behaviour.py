@@ -51,8 +51,10 @@ class WalkingMotion(Protocol):
     """What the behaviour uses of :class:`wbc.locomotion.Walking` (the walking motion)."""
 
     phase: Any
-    distance_m: float
     measured_velocity: np.ndarray
+
+    @property
+    def distance_m(self) -> float: ...
 
     @property
     def gait_phase(self) -> float: ...

@@ -202,7 +202,7 @@ class Walking:
                             kin.base_position, kin.v, kin.frame_position)
         feet_tasks = tuple(ctrl.foot_tasks[leg].reference for leg in LEGS)
         targets = Targets(ctrl.com_task.reference, ctrl.base_task.rotation,
-                          ctrl.base_task.reference, feet_tasks)  # type: ignore[arg-type]
+                          ctrl.base_task.reference, feet_tasks)
         # The groups stay referenced here: the kernel reads and writes at their addresses.
         self._groups = (measured, targets)
         addresses = address_record(measured, targets)
