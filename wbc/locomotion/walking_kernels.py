@@ -9,7 +9,8 @@ It writes the task references where the tasks keep them, after the checks their 
 make (3 finite numbers each); a value refused is left unwritten and reported, and the
 caller then calls the setter, which raises naming it. The arithmetic is the Python code's
 before it, operation for operation, so the references are the same to the last bit but
-where ``math.hypot`` rounds differently (CPython's own against the C library's: 1 ulp).
+where ``math.hypot`` rounds differently (CPython's own against the C library's: an ulp, seen
+in the walk gait's CoM lead, 8e-11 m on the feet after 4 s of closed loop; docs/walking.md).
 """
 
 from __future__ import annotations
