@@ -107,6 +107,7 @@ def _targets(a):  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def _finite3(values, row):  # pragma: no cover - compiled
+    """Whether row ``row`` of ``values`` holds 3 finite numbers."""
     return (math.isfinite(values[row, 0]) and math.isfinite(values[row, 1])
             and math.isfinite(values[row, 2]))
 
