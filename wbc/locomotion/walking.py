@@ -56,6 +56,7 @@ from wbc.model.description import LEGS
 
 # The phases by plain name (an enum member looked up on its class is slow in Python 3.11).
 _DONE, _STOPPING = WalkPhase.DONE, WalkPhase.STOPPING
+_IN_THE_AIR = (_Leg.SWING, _Leg.LATE)
 
 
 class Walking:
@@ -100,6 +101,7 @@ class Walking:
         self.target_velocity = np.zeros(3)
         self.measured_velocity: np.ndarray = state["measured_velocity"]
         self._legs = dict.fromkeys(LEGS, _Leg.STANCE)
+        self._swing_legs: tuple[str, ...] = ()
         self._mode, self._lifted, self._cycle = state["mode"], state["lifted"], state["cycle"]
         self._events, self._starts, self._ground = state["events"], state["starts"], state["ground"]
         self._footholds, self._path = state["footholds"], state["path"]
@@ -238,7 +240,7 @@ class Walking:
     @property
     def swing_legs(self) -> tuple[str, ...]:
         """Legs in the air now."""
-        return tuple(leg for leg in LEGS if self._legs[leg] in (_Leg.SWING, _Leg.LATE))
+        return self._swing_legs
 
     @property
     def footholds(self) -> dict[str, np.ndarray]:
@@ -283,6 +285,8 @@ class Walking:
     def _set_leg(self, index: int, state: _Leg) -> None:
         self._legs[LEGS[index]] = state
         self._mode[index] = state.value
+        # Read by viewers and recorders at their own rates: made at each change, not each read.
+        self._swing_legs = tuple(leg for leg in LEGS if self._legs[leg] in _IN_THE_AIR)
 
     def _handle_events(self, status: int) -> None:
         """The state machine's part of the tick: the legs' events, in ``LEGS`` order."""
