@@ -315,9 +315,9 @@ class SimulatedSensors:
         # Judged once here: comparing the model with the exact preset costs tens of us.
         self._exact = m.is_exact
         self.ticks = 0
-        # The one compiled call, its record, that record's arrays, the last record sampled.
-        self._program: Callable[[], None] | None = None
-        self._program_record = self._seen_record = None
+        self._program: Callable[[], None] | None = None  # the one call, bound to this record:
+        self._program_record: SensorRecord | None = None
+        self._seen_record: SensorRecord | None = None  # the last record sampled
         self._program_arrays: tuple[np.ndarray, ...] = ()
         self._header = np.zeros(3)  # what the call reads at _DT, _HAS_PREVIOUS, _ROW
 
@@ -381,7 +381,7 @@ class SimulatedSensors:
             header[_DT] = now - self._last_s
             header[_HAS_PREVIOUS] = self._has_previous
             header[_ROW] = self._row
-            self._program()  # type: ignore[misc]
+            self._program()  # type: ignore[misc]  # set with its record
         else:  # a PlantReading, ..., a RecordArrays
             self._compiled((self._qpos, self._qvel, self._torque, self._touch,
                             now - self._last_s, self._has_previous), self._sites, self._params,
