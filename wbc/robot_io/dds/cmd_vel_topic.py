@@ -13,7 +13,7 @@ A ROS 2 node's ``/cmd_vel`` publisher (rclpy on Fast DDS, Reliable or BestEffort
 reader as it is, on ``ROS_DOMAIN_ID`` equal to the domain id; on a loopback interface the
 node needs ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (or ``ROS_STATIC_PEERS=127.0.0.1``):
 with ROS 2's default range it announces itself by multicast, which the participants on
-``lo`` do not use (docs/dds.md, "A ROS 2 node on rt/cmd_vel";
+``lo`` do not use (docs/dds.md, "A ROS 2 node on `rt/cmd_vel`";
 ``tests/ros2/test_ros2_cmd_vel_dds.py``).
 """
 
