@@ -44,6 +44,7 @@ class MujocoRobot:
         #: The orders of its records and commands (the actuators', the feet's).
         self.orders = Orders.of(self.joint_names, self.leg_names, name="the plant's actuator")
         self._record = SensorRecord.zeros(self.orders)
+        self.sensors.prepare(self._record)  # its one compiled call loaded here, not in a tick
 
     @property
     def joint_names(self) -> tuple[str, ...]:

@@ -31,11 +31,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 
+from sim.sensor_groups import PlantReading, RecordArrays, SensorDrift, SensorSites
 from sim.sensor_model import DEFAULT_SENSORS, SENSOR_PRESETS, SensorModel
 from wbc.core.compiled_program import CompiledProgram
 from wbc.core.errors import ConfigurationError
@@ -73,54 +74,6 @@ def sampler_params(model: SensorModel) -> np.ndarray:
     """The parameter record of ``model`` the compiled sampler reads (:data:`_PARAMS`)."""
     return parameter_record({name: bool(getattr(model, name)) if name == "foot_force_integer"
                              else float(getattr(model, name)) for name in _PARAMS})
-
-
-class PlantReading(NamedTuple):
-    """What the plant gives a sample: MuJoCo's free-joint state ``qpos``, ``qvel`` (world
-    linear velocity, body angular velocity), each joint's applied torque [N m] (robot joint
-    order), each foot's normal force [N] (``LEGS`` order), the time since the previous
-    sample [s] and whether there was one (else the IMU site is taken as not accelerating)."""
-
-    qpos: np.ndarray
-    qvel: np.ndarray
-    actuator_force: np.ndarray
-    touch: np.ndarray
-    dt: float
-    has_previous: bool
-
-
-class SensorSites(NamedTuple):
-    """Where the sensors read the plant: each joint's qpos and qvel index (robot joint
-    order), the row of ``touch`` of each foot (robot leg order), the IMU in the base [m]."""
-
-    joint_qpos: np.ndarray
-    joint_dof: np.ndarray
-    leg_rows: np.ndarray
-    imu_offset: np.ndarray
-
-
-class SensorDrift(NamedTuple):
-    """The sensors' state between samples (in/out): the IMU site's last world velocity, the
-    walking biases, the attitude filter's quaternion ``(w, x, y, z)`` and integral term
-    [rad/s]."""
-
-    site_velocity: np.ndarray
-    gyro_bias: np.ndarray
-    accel_bias: np.ndarray
-    attitude: np.ndarray
-    integral: np.ndarray
-
-
-class RecordArrays(NamedTuple):
-    """Out: a :class:`wbc.SensorRecord`'s arrays the sample fills."""
-
-    quaternion: np.ndarray
-    gyroscope: np.ndarray
-    accelerometer: np.ndarray
-    q: np.ndarray
-    dq: np.ndarray
-    tau: np.ndarray
-    feet: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -294,10 +247,18 @@ class SimulatedSensors:
             numba.typeof(self._sites), numba.typeof(self._params),
             numba.types.NamedTuple((vector,) * 5, SensorDrift), vector,
             numba.types.NamedTuple((vector,) * 7, RecordArrays)))
+        self._program_record: SensorRecord | None = None
         self.reset()
+
+    def prepare(self, record: SensorRecord) -> None:
+        """Bind the one compiled call to ``record`` now, not in a later sample (it loads
+        compiled code, hundreds of ms in a fresh process): a robot's own buffer, filled
+        every period."""
+        self._bind_program(record)
 
     def reset(self) -> None:
         """Start again: new biases and noise from the seed, the attitude filter on the truth."""
+        bound = self._program_record  # bound again below, to the new arrays
         self._rng = np.random.default_rng(self.seed)
         m = self.model
         self.gyro_bias = self._rng.normal(0.0, 1.0, 3) * m.gyro_bias_rad_s
@@ -316,10 +277,12 @@ class SimulatedSensors:
         self._exact = m.is_exact
         self.ticks = 0
         self._program: Callable[[], None] | None = None  # the one call, bound to this record:
-        self._program_record: SensorRecord | None = None
+        self._program_record = None
         self._seen_record: SensorRecord | None = None  # the last record sampled
         self._program_arrays: tuple[np.ndarray, ...] = ()
         self._header = np.zeros(3)  # what the call reads at _DT, _HAS_PREVIOUS, _ROW
+        if bound is not None:
+            self._bind_program(bound)
 
     def _bind_program(self, record: SensorRecord) -> None:
         """The sample as one compiled call that reads every array, ``record``'s too, from a
