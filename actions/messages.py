@@ -89,9 +89,10 @@ class Message:
     def _normalise(self, where: str) -> None:
         """Check and normalise every field in place, nested messages included."""
         for name, hint in field_types(type(self)).items():
-            object.__setattr__(
-                self, name, _coerce(hint, getattr(self, name), f"{where}.{name}", copy=False)
-            )
+            value = getattr(self, name)
+            if type(value) is hint and hint in _PLAIN:
+                continue  # already normal (most fields of the feedback sent at 50 Hz)
+            object.__setattr__(self, name, _coerce(hint, value, f"{where}.{name}", copy=False))
         self._check(where)
 
     def _normalised(self, where: str, *, copy: bool) -> typing.Self:
@@ -164,12 +165,18 @@ def _describe(value: Any) -> str:
     return f"{value!r} (type {type(value).__name__})"
 
 
+#: Field types whose exact Python instances are already normal (no conversion, no check left).
+_PLAIN = frozenset((float, int, bool, str))
+
+
 def _coerce(hint: Any, value: Any, where: str, *, copy: bool) -> Any:
     """Check ``value`` against the field type ``hint`` and return its normalised form.
 
     Nested messages are normalised in place, or copied when ``copy`` is true; lists are
     always new lists.
     """
+    if type(value) is hint and hint in _PLAIN:
+        return value  # what the branches below return for it (feedback at 50 Hz: most fields)
     if typing.get_origin(hint) is list:
         (item_hint,) = typing.get_args(hint)
         if item_hint is float and type(value) is np.ndarray and value.ndim == 1 and (
