@@ -267,36 +267,79 @@ def qp_size(controller: BalanceController) -> str:
     return f"{solved.n} var, {solved.m} rows (reduced from {full.n} var, {full.m} rows)"
 
 
-def run_scaling(name: str, factory: Callable[[], BalanceController], ticks: int
+def _block_ratios(samples: list[float], reference: list[float], block_ticks: int
+                  ) -> list[float]:
+    """Median of each turn of ``samples`` over the median of the same turn of ``reference``."""
+    blocks = min(len(samples), len(reference)) // block_ticks
+    return [float(np.median(samples[i * block_ticks:(i + 1) * block_ticks])
+                  / np.median(reference[i * block_ticks:(i + 1) * block_ticks]))
+            for i in range(blocks)]
+
+
+def run_scaling(ticks: int, *, block_ticks: int = 50,
+                controllers: Sequence[tuple[str, Callable[[], BalanceController]]] = (
+                    (DEFAULT, WholeBodyController), (PLACO, PlacoController)),
                 ) -> list[dict[str, Any]]:
-    """Tick times standing on four feet, then with FR held up (swing task on, then off)."""
-    controller = factory()
-    lift_loop = LiftLoop(controller)
+    """Tick times standing on four feet, then with FR held up (swing task on, then off),
+    every controller in turns.
 
-    def tick(n: int) -> tuple[list[float], list[float]]:
-        times, cpu_times = [], []
+    Each controller drives its own loop; every scenario is reached by all of them (untimed),
+    then they take turns of ``block_ticks`` ticks on it until each has ``ticks`` timed ticks,
+    so that the machine's drift between episodes falls on all alike (as in
+    :func:`run_head_to_head`). Rows: one a controller and scenario, with its ratio of medians
+    to the last controller's (PlaCo's) on the same scenario and the p10/p50/p90 of the
+    per-turn ratios.
+    """
+    if ticks < block_ticks or block_ticks < 1:
+        raise ValueError(f"run_scaling: ticks={ticks} and block_ticks={block_ticks}; valid: "
+                         "1 <= block_ticks <= ticks")
+    loops = {name: LiftLoop(factory()) for name, factory in controllers}
+
+    def untimed(lift_loop: LiftLoop, n: int) -> None:
         for _ in range(n):
-            _, _, _, out, cpu_s = lift_loop.tick()
-            times.append(out.timings["total"])
-            cpu_times.append(cpu_s)
-        return times, cpu_times
+            lift_loop.tick()
 
-    tick(WARMUP_TICKS)
-    rows = [("4 contacts, standing", tick(ticks))]
-    size4 = qp_size(controller)
-    lift = lift_loop.start_lift(hold_s=1e3, timing=SCALING_TIMING)
-    while lift.phase is not LiftPhase.HOLDING:
-        tick(1)
-    tick(ticks)  # settle at the hold (untimed)
-    rows.append(("3 contacts + swing-foot task (FR held up)", tick(ticks)))
-    size3 = qp_size(controller)
-    controller.set_foot_weight(LEG, 0.0)
-    rows.append(("3 contacts, swing-foot task weight 0", tick(ticks)))
-    sizes = [size4, size3, size3]
-    return [{"controller": name, "scenario": label, "qp": size, "ticks": len(times),
-             **{f"{k}_us": v for k, v in stats_us(times).items()},
-             "cpu_median_us": stats_us(cpu_times)["median"]}
-            for (label, (times, cpu_times)), size in zip(rows, sizes)]
+    def in_turns() -> dict[str, tuple[list[float], list[float]]]:
+        samples: dict[str, tuple[list[float], list[float]]] = {n: ([], []) for n in loops}
+        for _ in range(0, ticks, block_ticks):
+            for name, lift_loop in loops.items():
+                times, cpu_times = samples[name]
+                for _ in range(min(block_ticks, ticks - len(times))):
+                    _, _, _, out, cpu_s = lift_loop.tick()
+                    times.append(out.timings["total"])
+                    cpu_times.append(cpu_s)
+        return samples
+
+    for lift_loop in loops.values():
+        untimed(lift_loop, WARMUP_TICKS)
+    scenarios = [("4 contacts, standing", in_turns(),
+                  {n: qp_size(lp.controller) for n, lp in loops.items()})]
+    for lift_loop in loops.values():
+        lift = lift_loop.start_lift(hold_s=1e3, timing=SCALING_TIMING)
+        while lift.phase is not LiftPhase.HOLDING:
+            untimed(lift_loop, 1)
+        untimed(lift_loop, ticks)  # settle at the hold
+    size3 = {n: qp_size(lp.controller) for n, lp in loops.items()}
+    scenarios.append(("3 contacts + swing-foot task (FR held up)", in_turns(), size3))
+    for lift_loop in loops.values():
+        lift_loop.controller.set_foot_weight(LEG, 0.0)
+    scenarios.append(("3 contacts, swing-foot task weight 0", in_turns(), size3))
+
+    reference = controllers[-1][0]
+    rows = []
+    for name in loops:
+        for label, samples, sizes in scenarios:
+            times, cpu_times = samples[name]
+            ref = samples[reference][0]
+            ratios = _block_ratios(times, ref, block_ticks)
+            rows.append({"controller": name, "scenario": label, "qp": sizes[name],
+                         "ticks": len(times), "block_ticks": block_ticks,
+                         **{f"{k}_us": v for k, v in stats_us(times).items()},
+                         "cpu_median_us": stats_us(cpu_times)["median"],
+                         "ratio_to_placo": float(np.median(times) / np.median(ref)),
+                         "block_ratio_p10_p50_p90": [float(np.percentile(ratios, k))
+                                                     for k in (10, 50, 90)]})
+    return rows
 
 
 def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | None,
@@ -323,10 +366,7 @@ def run_head_to_head(*, block_ticks: int, hold_s: float, stop_after_s: float | N
                 _, _, _, out, _ = lift_loop.tick()
                 samples.append(out.timings["total"])
     default, placo = runs[DEFAULT][1], runs[PLACO][1]
-    blocks = min(len(default), len(placo)) // block_ticks
-    ratios = [float(np.median(default[i * block_ticks:(i + 1) * block_ticks])
-                    / np.median(placo[i * block_ticks:(i + 1) * block_ticks]))
-              for i in range(blocks)]
+    ratios = _block_ratios(default, placo, block_ticks)
     return {"block_ticks": block_ticks, "default": stats_us(default),
             "placo": stats_us(placo),
             "median_ratio": float(np.median(default) / np.median(placo)),

@@ -66,12 +66,16 @@ def format_report(report: dict[str, Any]) -> str:
                      f"{_fmt(row['p90_us']):>8}{_fmt(row['p99_us']):>8}")
     lines += ["", "Scaling: tick time [us] vs contacts and tasks"]
     head = (f"{'controller':<16}{'scenario':<44}{'QP':<36}{'ticks':>6}{'median':>8}{'p90':>8}"
-            f"{'p99':>8}{'cpu med':>8}")
+            f"{'p99':>8}{'cpu med':>8}{'x PlaCo':>8}{'turns p10/p50/p90':>19}")
     lines += [head, "-" * len(head)]
     for row in report["scaling"]:
+        # Reports written before the scaling ran in turns have no ratio.
+        turns = row.get("block_ratio_p10_p50_p90")
         lines.append(f"{row['controller']:<16}{row['scenario']:<44}{row['qp']:<36}"
                      f"{row['ticks']:>6}{_fmt(row['median_us']):>8}{_fmt(row['p90_us']):>8}"
-                     f"{_fmt(row['p99_us']):>8}{_fmt(row['cpu_median_us']):>8}")
+                     f"{_fmt(row['p99_us']):>8}{_fmt(row['cpu_median_us']):>8}"
+                     f"{_fmt(row.get('ratio_to_placo'), 2):>8}"
+                     f"{'/'.join(f'{r:.2f}' for r in turns) if turns else '-':>19}")
     if "tsid" in report:  # reports written before the TSID row have none
         lines += ["", format_tsid_row(report["tsid"])]
     ep = report["episode_table"]

@@ -90,6 +90,15 @@ def test_scaling_and_episode_tables(quick_run):
     assert len(scenarios) == 6
     for row in report["scaling"]:
         assert row["ticks"] == 200 and row["median_us"] > 0 and row["cpu_median_us"] > 0
+        # Measured in turns of 50 ticks against PlaCo on the same scenario.
+        assert row["block_ticks"] == 50
+        placo = next(r for r in report["scaling"]
+                     if r["controller"] == "placo" and r["scenario"] == row["scenario"])
+        assert row["ratio_to_placo"] == pytest.approx(row["median_us"] / placo["median_us"])
+        low, mid, high = row["block_ratio_p10_p50_p90"]
+        assert 0 < low <= mid <= high
+        if row["controller"] == "placo":
+            assert low == mid == high == pytest.approx(1.0)
     metrics = report["episode_table"]["metrics"]
     for key in ("raised_foot_rms_mm", "raised_foot_max_mm", "holding_rms_mm",
                 "holding_max_mm", "stance_sliding_max_mm", "stance_travel_max_mm",
