@@ -60,3 +60,6 @@ warm() { .venv/bin/go2-wbc high-five --hold 0 --estimator "$1" > /dev/null 2>&1;
 warm inekf & inekf=$!
 warm kf & kf=$!
 wait "$inekf" && wait "$kf" || echo "setup: the kernels' warm-up failed; the first run compiles them"
+# A short walk: the gait's kernels and the two-foot layouts' tick programs (about 30 s).
+.venv/bin/go2-wbc walk --forward 0.3 --duration 0.6 > /dev/null 2>&1 \
+  || echo "setup: the walk's warm-up failed; the first walk compiles its kernels"
