@@ -3,7 +3,11 @@ cyclonedds' own serialiser, conversions, and a loopback exchange through Cyclone
 
 from __future__ import annotations
 
+import dataclasses
+import json
+import math
 import os
+import random
 import time
 from typing import Any
 
@@ -20,15 +24,19 @@ from cyclonedds.core import (
     WaitSet,
 )
 from cyclonedds.domain import Domain, DomainParticipant
-from cyclonedds.idl import Endianness
+from cyclonedds.idl import Endianness, IdlStruct
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
+from actions.dds.payload_codec import encode_message
+from actions.go2.go2_interfaces import HighFiveFeedback
+from actions.ros_interfaces.control_msgs import FOLLOW_JOINT_TRAJECTORY
 from wbc.core.errors import ConfigurationError
 from wbc.model.joint_map import JointMap
 from wbc.robot_io.dds import domain_config as domain_config_module
+from wbc.robot_io.dds.action_messages import GoalFeedback
 from wbc.robot_io.dds.c_layout import (
     BMS_CMD_DTYPE,
     BMS_STATE_DTYPE,
@@ -248,6 +256,29 @@ def test_decoding_a_payload_without_header():
         decoded = LowStateMessage.deserialize(payload, has_header=False,
                                               use_version_2=version == 2)
         assert decoded.record.tobytes() == record.tobytes()
+
+
+def test_feedbacks_hand_written_encodings_are_the_generic_ones_byte_for_byte():
+    """GoalFeedback's XCDR1 message (written by hand) and a feedback's JSON (flat fields as they
+    are) equal cyclonedds' generic serialiser's and ``json.dumps`` of ``dataclasses.asdict``'s,
+    on seeded random text (multi-byte UTF-8, every string length mod 4) and stamps."""
+    rng = random.Random(11)
+    alphabet = "abcXYZ019 {}\":,._-\u00e9\u20ac\U0001f600"
+    for _ in range(500):
+        texts = ["".join(rng.choice(alphabet) for _ in range(rng.randint(0, 40)))
+                 for _ in range(3)]
+        stamp = rng.choice([0.0, -1.5, math.nan, 1e300, rng.uniform(-1e6, 1e6)])
+        sample = GoalFeedback(*texts, stamp)
+        for version in (None, False, True):
+            assert sample.serialize(use_version_2=version) == IdlStruct.serialize(
+                sample, use_version_2=version)
+        assert GoalFeedback.deserialize(sample.serialize()).feedback == texts[2]
+        feedback = HighFiveFeedback(phase=texts[0], progress=rng.random())
+        assert encode_message(feedback, HighFiveFeedback, what="feedback") == json.dumps(
+            dataclasses.asdict(feedback), separators=(",", ":"))
+    nested = FOLLOW_JOINT_TRAJECTORY.Feedback()  # nested messages go through asdict
+    assert encode_message(nested, FOLLOW_JOINT_TRAJECTORY.Feedback, what="feedback") == (
+        json.dumps(dataclasses.asdict(nested.validated_copy()), separators=(",", ":")))
 
 
 def test_default_sample_serializes_as_the_idl_default():

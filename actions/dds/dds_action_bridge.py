@@ -41,6 +41,7 @@ from wbc.robot_io.dds.action_endpoints import (
     DEFAULT_PREFIX,
     ActionEndpoints,
     DdsError,
+    SampleWatch,
     check_lease,
     check_name,
     is_alive,
@@ -135,12 +136,15 @@ class DdsActionBridge:
         self._lock = threading.Lock()  # serialises poll() and close()
         self._served: dict[str, _Served] = {}
         self._directory: ServedDirectory | None = None
+        self._requests: SampleWatch | None = None
         self._dds = join_domain(interface, domain_id=domain_id)
         try:
+            self._requests = SampleWatch(self._dds.participant)  # every request reader
             for client in clients:
                 ends = ActionEndpoints.for_server(self._dds, self.prefix, client.action_name,
                                                   lease_s=lease_s, client_lease_s=client_lease_s)
                 self._served[client.action_name] = _Served(client.action_name, client, ends)
+                self._requests.watch(ends)
             self._directory = ServedDirectory.publish(
                 self._dds, self.prefix, {name: served.client.action_type.type_name
                                          for name, served in self._served.items()},
@@ -175,9 +179,10 @@ class DdsActionBridge:
         with self._lock:
             if self._dds.is_closed:
                 return
-            for served in self._served.values():
-                self._take(served, "send_goal_request", self._on_goal_request)
-                self._take(served, "cancel_goal_request", self._on_cancel_request)
+            if self._requests is None or self._requests.pending():
+                for served in self._served.values():
+                    self._take(served, "send_goal_request", self._on_goal_request)
+                    self._take(served, "cancel_goal_request", self._on_cancel_request)
             while self._pending:
                 try:
                     self._pending.popleft()()
@@ -202,6 +207,8 @@ class DdsActionBridge:
                     remote.handle.cancel_goal_async()
             if self._directory is not None:
                 self._directory.close()
+            if self._requests is not None:
+                self._requests.close()
             for served in self._served.values():
                 served.ends.close()
             self._dds.close()

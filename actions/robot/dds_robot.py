@@ -229,6 +229,11 @@ class DdsRobot:
             self.counters.commands_unmatched += 1
         self.counters.commands_sent += 1
 
+    #: The command is built into the frame before :meth:`write_command` returns and is not
+    #: kept: a ``MappedRobot`` hands it the controller's own
+    #: (:class:`~actions.robot.robot_capabilities.AppliesCommandAtOnce`).
+    apply_command = write_command
+
     # -- start-up and teardown --------------------------------------------------------------
 
     def wait_for_first_state(self, timeout_s: float = 5.0) -> SensorRecord:

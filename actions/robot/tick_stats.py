@@ -20,7 +20,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numba
 import numpy as np
+
+from wbc.core.errors import ConfigurationError
 
 #: The stages of a tick, in order.
 STAGES = ("read", "actions", "controller", "write", "bridge", "hooks", "gc")
@@ -29,6 +32,21 @@ SERIES = (*STAGES, "tick", "cpu", "latency", "wake", "align")
 _LOW_S = 1e-7  # the histogram's first bin holds everything at or below 0.1 us
 _RATIO = 1.02
 _BINS = math.ceil(math.log(10.0 / _LOW_S) / math.log(_RATIO))  # up to 10 s
+
+
+@numba.njit(numba.void(numba.float64[::1], numba.int64[:, ::1], numba.float64[::1],
+                       numba.float64[::1], numba.float64[:, ::1], numba.int64), cache=True)
+def _accumulate(times_s, hist, sums, maxima, ring, ring_row):
+    """Add one tick's times [s] to the histograms, sums, maxima and the ring's row
+    ``ring_row`` (one compiled call: the loop pays it every tick, after the tick)."""
+    log_low, per_log = math.log(_LOW_S), 1.0 / math.log(_RATIO)
+    for k in range(times_s.shape[0]):
+        t = times_s[k]
+        b = int((math.log(max(t, _LOW_S)) - log_low) * per_log)
+        hist[k, min(b, _BINS - 1)] += 1
+        sums[k] += t
+        maxima[k] = max(maxima[k], t)
+        ring[ring_row, k] = t
 
 
 class TickStats:
@@ -41,7 +59,6 @@ class TickStats:
     def __init__(self, window_ticks: int) -> None:
         n = len(SERIES)
         self._hist = np.zeros((n, _BINS), dtype=np.int64)
-        self._rows = np.arange(n)
         self._sum = np.zeros(n)
         self._max = np.zeros(n)
         self._ring = np.zeros((max(1, int(window_ticks)), n))
@@ -59,16 +76,14 @@ class TickStats:
     def add(self, times_s: np.ndarray, *, fresh: bool, missed: bool) -> None:
         """Record one tick: ``times_s`` (len(SERIES),) [s]; whether it had a fresh state and
         whether it overran the next deadline."""
+        times = np.ascontiguousarray(times_s, dtype=np.float64)
+        if times.shape != self._sum.shape:  # the kernel indexes without bounds checks
+            raise ConfigurationError(f"times_s: expected {len(SERIES)} times [s] ({SERIES}), "
+                                     f"received shape {np.shape(times_s)}")
         self.ticks += 1
         self.misses += missed
         self.no_fresh_state += not fresh
-        clipped = np.maximum(times_s, _LOW_S)
-        bins = ((np.log(clipped) - math.log(_LOW_S)) * (1.0 / math.log(_RATIO))).astype(np.intp)
-        np.minimum(bins, _BINS - 1, out=bins)
-        self._hist[self._rows, bins] += 1
-        self._sum += times_s
-        np.maximum(self._max, times_s, out=self._max)
-        self._ring[self._ring_next] = times_s
+        _accumulate(times, self._hist, self._sum, self._max, self._ring, self._ring_next)
         self._ring_next = (self._ring_next + 1) % len(self._ring)
         self._ring_used = min(self._ring_used + 1, len(self._ring))
 

@@ -89,6 +89,7 @@ FEEDBACK_DEPTH = 32
 #: Longest a write may block on a full reliable history [s].
 MAX_BLOCKING_S = 0.1
 _LIVELINESS_POLICY_ID = 8  # DDS_LIVELINESS_QOS_POLICY_ID
+_ANY_SAMPLE = SampleState.Any | ViewState.Any | InstanceState.Any
 #: Segments of a name: letters, digits and underscores, starting with a letter.
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$")
 
@@ -204,6 +205,8 @@ class ActionEndpoints:
         self.topics: dict[str, Topic[Any]] = {}
         self.readers: dict[str, DataReader[Any]] = {}
         self.writers: dict[str, DataWriter[Any]] = {}
+        #: A condition per reader, triggered while it holds any sample (valid or a key).
+        self.conditions: dict[str, ReadCondition] = {}
         self._waitset: WaitSet | None = None
         self._wait_entities: list[Any] = []
 
@@ -237,11 +240,8 @@ class ActionEndpoints:
         ends._write("send_goal_request", SendGoalRequest, request_qos(lease_s))
         ends._write("cancel_goal_request", CancelGoalRequest, request_qos(lease_s))
         ends._waitset = WaitSet(ends._participant)
-        any_sample = SampleState.Any | ViewState.Any | InstanceState.Any
-        ends._wait_entities = [ReadCondition(reader, any_sample)
-                               for reader in ends.readers.values()]
-        ends._wait_entities.append(GuardCondition(ends._participant))
-        for condition in ends._wait_entities:
+        ends._wait_entities = [GuardCondition(ends._participant)]  # wake()'s
+        for condition in (*ends.conditions.values(), *ends._wait_entities):
             ends._waitset.attach(condition)
         return ends
 
@@ -301,9 +301,9 @@ class ActionEndpoints:
 
     def close(self) -> None:
         """Delete the wait set, readers, writers and topics; idempotent."""
-        delete_entities(self._waitset, *self._wait_entities, *self.readers.values(),
-                        *self.writers.values(), *self.topics.values())
-        self._waitset, self._wait_entities = None, []
+        delete_entities(self._waitset, *self._wait_entities, *self.conditions.values(),
+                        *self.readers.values(), *self.writers.values(), *self.topics.values())
+        self._waitset, self._wait_entities, self.conditions = None, [], {}
         self.readers, self.writers, self.topics = {}, {}, {}
 
     def _topic(self, role: str, data_type: type) -> Topic[Any]:
@@ -312,10 +312,45 @@ class ActionEndpoints:
         return topic
 
     def _read(self, role: str, data_type: type, qos: Qos) -> None:
-        self.readers[role] = DataReader(self._participant, self._topic(role, data_type), qos=qos)
+        reader = DataReader(self._participant, self._topic(role, data_type), qos=qos)
+        self.readers[role] = reader
+        self.conditions[role] = ReadCondition(reader, _ANY_SAMPLE)
 
     def _write(self, role: str, data_type: type, qos: Qos) -> None:
         self.writers[role] = DataWriter(self._participant, self._topic(role, data_type), qos=qos)
+
+
+class SampleWatch:
+    """Whether any of the readers of several :class:`ActionEndpoints` holds a sample, in one
+    call: a wait set over their conditions. A server polling every control tick with nothing
+    to take then pays one call, not a take per reader.
+
+    Args:
+        participant: The participant of the endpoints watched.
+    """
+
+    def __init__(self, participant: Any) -> None:
+        self._waitset: WaitSet | None = WaitSet(participant)
+
+    def watch(self, ends: ActionEndpoints) -> None:
+        """Watch every reader of ``ends``."""
+        if self._waitset is not None:
+            for condition in ends.conditions.values():
+                self._waitset.attach(condition)
+
+    def pending(self) -> bool:
+        """Whether a watched reader holds a sample now (``True`` when the wait set fails or is
+        closed: the caller then takes, as without a watch)."""
+        try:
+            return self._waitset is None or self._waitset.wait(0) > 0
+        except DDSException:
+            logger.exception("SampleWatch: the wait set failed; taking anyway")
+            return True
+
+    def close(self) -> None:
+        """Delete the wait set (before the endpoints' conditions); idempotent."""
+        delete_entities(self._waitset)
+        self._waitset = None
 
 
 def write_logged(ends: ActionEndpoints, role: str, sample: Any) -> None:

@@ -15,7 +15,9 @@ on 11.0.1's TK_UINT8).
 
 # No `from __future__ import annotations`: cyclonedds resolves the field types of an IdlStruct
 # from its annotations, and cannot resolve builtins (`str`) given as strings.
+import struct
 from dataclasses import dataclass, field
+from typing import Any
 
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.annotations import key
@@ -23,6 +25,19 @@ from cyclonedds.idl.types import float64, int8, int32, sequence
 
 #: IDL module of the types (their names on the wire: ``wbc_actions::SendGoalRequest`` ...).
 _MODULE = "wbc_actions"
+#: The encapsulation header of a little-endian XCDR1 message (plain CDR, options 0).
+_XCDR1_LE = b"\x00\x01\x00\x00"
+_UINT32, _FLOAT64 = struct.Struct("<I"), struct.Struct("<d")
+
+
+def _put_cdr_string(out: bytearray, text: str) -> None:
+    """Append a CDR string to a message (header first): its length with the NUL as a
+    4-aligned uint32, its UTF-8 bytes, the NUL."""
+    out += bytes(-(len(out) - len(_XCDR1_LE)) % 4)
+    data = text.encode()
+    out += _UINT32.pack(len(data) + 1)
+    out += data
+    out.append(0)
 
 
 @dataclass
@@ -127,6 +142,20 @@ class GoalFeedback(IdlStruct, typename=f"{_MODULE}::GoalFeedback"):
     action_name: str
     feedback: str
     stamp_s: float64
+
+    def serialize(self, buffer: Any = None, endianness: Any = None,
+                  use_version_2: bool | None = None) -> bytes:
+        """The XCDR1 message, byte for byte what cyclonedds' generic serialiser gives, in about
+        a tenth of its time (feedback is written 50 times a second from the control loop's
+        thread); any other request (a buffer, an endianness, XCDR2) goes the generic way."""
+        if buffer is not None or endianness is not None or use_version_2:
+            return super().serialize(buffer, endianness, use_version_2)
+        out = bytearray(_XCDR1_LE)
+        for text in (self.goal_id, self.action_name, self.feedback):
+            _put_cdr_string(out, text)
+        out += bytes(-(len(out) - len(_XCDR1_LE)) % 8)  # a float64 sits on 8 in XCDR1
+        out += _FLOAT64.pack(self.stamp_s)
+        return bytes(out)
 
 
 @dataclass
