@@ -106,11 +106,18 @@ def timing_lines(timing: dict[str, Any]) -> list[str]:
                          f"{_number(st['p99'], '.1f'):>8}   {_number(low, '.2f')}-"
                          f"{_number(mid, '.2f')}-{_number(high, '.2f')}")
     lines.append("")
-    lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument):")
+    lines.append("Real-time factor (ControlLoop.spin_once, goal to result, no instrument; "
+                 "rounds of a walk then standing as long, medians):")
     for row in timing["runs"]:
+        rounds = row["rounds"]
+        walking = [r["walking"] for r in rounds]
+        standing = [r["standing"] for r in rounds]
+        ratios = [r["walking"] / r["standing"] for r in rounds]
         lines.append(
-            f"  {row['state']}: walking {row['real_time_factor']:.2f} (sim time over CPU time "
+            f"  {row['state']}: walking {row['real_time_factor']:.2f} ({len(rounds)} rounds "
+            f"{min(walking):.2f}-{max(walking):.2f}; sim time over CPU time "
             f"{row['sim_over_cpu']:.2f}, cpu share {row['cpu_share']:.2f}, {row['status']}); "
-            f"standing, the same run: {row['standing_real_time_factor']:.2f} (over CPU time "
-            f"{row['standing_sim_over_cpu']:.2f})")
+            f"standing {row['standing_real_time_factor']:.2f} ({min(standing):.2f}-"
+            f"{max(standing):.2f}; over CPU time {row['standing_sim_over_cpu']:.2f}); "
+            f"walking/standing per round {min(ratios):.2f}-{max(ratios):.2f}")
     return lines

@@ -101,7 +101,9 @@ def _report() -> dict:
                               "turn_ratios": {"controller": [1.1, 1.2, 1.3],
                                               "tick": [2.0, 2.5, 3.0]}},
                  "walking_ticks_cpu_us": {"controller": cpu, "tick": cpu},
-                 "standing_real_time_factor": 5.0, "standing_sim_over_cpu": 6.0}]}}
+                 "standing_real_time_factor": 5.0, "standing_sim_over_cpu": 6.0,
+                 "rounds": [{"walking": 2.5, "standing": 5.0}, {"walking": 2.0, "standing": 5.0},
+                            {"walking": 3.0, "standing": 4.0}]}]}}
 
 
 def test_the_report_has_a_row_per_run_with_units():
@@ -118,8 +120,9 @@ def test_the_report_has_a_row_per_run_with_units():
                      "150.0", "1.10-1.20-1.30"],
                     ["estimate", "tick", "120.0", "300.0", "100.0", "150.0", "100.0", "150.0",
                      "2.00-2.50-3.00"]]
-    assert ("estimate: walking 2.50 (sim time over CPU time 2.80, cpu share 0.90, "
-            "SUCCEEDED); standing, the same run: 5.00 (over CPU time 6.00)") in text
+    assert ("estimate: walking 2.50 (3 rounds 2.00-3.00; sim time over CPU time 2.80, cpu "
+            "share 0.90, SUCCEEDED); standing 5.00 (4.00-5.00; over CPU time 6.00); "
+            "walking/standing per round 0.40-0.75") in text
 
 
 def test_a_report_of_some_parts_has_only_their_tables():
