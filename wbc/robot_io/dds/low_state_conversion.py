@@ -13,12 +13,20 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from wbc.model.description import LEGS, UNITREE_SDK_LEGS
 from wbc.model.joint_map import JointMap
 from wbc.model.orders import DESCRIPTION_ORDERS
-from wbc.robot_io.dds.c_layout import HEAD, LOW_STATE_DTYPE, check_record, set_crc, zero_record
+from wbc.robot_io.dds.c_layout import (
+    HEAD,
+    LOW_STATE_DTYPE,
+    MOTOR_STATE_DTYPE,
+    check_record,
+    set_crc,
+    zero_record,
+)
 from wbc.robot_io.sensor_record import SensorRecord
 from wbc.robot_io.unitree_sdk import SDK_LEG_MOTORS
 
@@ -28,6 +36,57 @@ _SDK_LEG_SLOTS = np.array([UNITREE_SDK_LEGS.index(leg) for leg in LEGS])
 #: Each SDK leg's slot in the description's foot order.
 _DESCRIPTION_LEG_SLOTS = np.array([LEGS.index(leg) for leg in UNITREE_SDK_LEGS])
 _INT16 = np.iinfo(np.int16)
+
+
+def _word_index(field: str, count: int, size: int) -> np.ndarray:
+    """Where ``count`` consecutive ``size``-byte values from ``field`` (a path such as
+    ``imu_state.gyroscope``) sit in a LowState_ image, in ``size``-byte words."""
+    dtype, offset = LOW_STATE_DTYPE, 0
+    for name in field.split("."):
+        sub, at = dtype.fields[name][:2]
+        offset += at
+        dtype = sub.base if sub.subdtype is not None else sub
+    assert offset % size == 0  # align=True: every field on its own size
+    return offset // size + np.arange(count)
+
+
+def _motor_words(field: str) -> np.ndarray:
+    """The 12 leg motors' ``field`` as float32 words, in the description's joint order."""
+    at = LOW_STATE_DTYPE.fields["motor_state"][1] + MOTOR_STATE_DTYPE.fields[field][1]
+    sdk = (at + MOTOR_STATE_DTYPE.itemsize * np.arange(SDK_LEG_MOTORS)) // 4
+    return sdk[_SDK.inverse]
+
+
+#: The float32 words :func:`sensor_record_from_low_state` reads, in the order it writes them:
+#: quaternion (4), gyroscope (3), accelerometer (3), then q, dq, tau_est (12 each).
+_FLOAT_WORDS = np.concatenate([
+    _word_index("imu_state.quaternion", 4, 4), _word_index("imu_state.gyroscope", 3, 4),
+    _word_index("imu_state.accelerometer", 3, 4), _motor_words("q"), _motor_words("dq"),
+    _motor_words("tau_est")]).astype(np.int64)
+#: The int16 words of ``foot_force``, in the description's leg order.
+_FOOT_HALVES = _word_index("foot_force", 4, 2)[_SDK_LEG_SLOTS].astype(np.int64)
+_F8 = numba.float64[::1]
+
+
+@numba.njit(numba.void(numba.uint8[::1], numba.int64[::1], numba.int64[::1], _F8, _F8, _F8,
+                       _F8, _F8, _F8, _F8), cache=True)
+def _gather(image, float_words, foot_halves, quaternion, gyroscope, accelerometer, q, dq,
+            tau_est, foot_force):
+    """The sensor values of a LowState_ image (its bytes) into the record's vectors."""
+    words, halves = image.view(np.float32), image.view(np.int16)
+    targets = (quaternion, gyroscope, accelerometer, q, dq, tau_est)
+    size = 0
+    for target in targets:
+        size += target.shape[0]
+    if size != float_words.shape[0] or foot_force.shape[0] != foot_halves.shape[0]:
+        raise ValueError("a vector of the sensor record has another length")
+    k = 0
+    for target in targets:
+        for i in range(target.shape[0]):
+            target[i] = words[float_words[k]]
+            k += 1
+    for i in range(4):
+        foot_force[i] = halves[foot_halves[i]]
 
 
 def sensor_record_from_low_state(record: np.ndarray, *, stamp_s: float | None = None,
@@ -61,6 +120,13 @@ def sensor_record_from_low_state(record: np.ndarray, *, stamp_s: float | None = 
     out.orders = DESCRIPTION_ORDERS  # whatever the buffer held before: these orders now
     out.stamp_s = float(stamp)
     out.tick = tick
+    try:  # the buffers SensorRecord.zeros makes (float64 vectors): one compiled call
+        _gather(np.frombuffer(record, dtype=np.uint8), _FLOAT_WORDS, _FOOT_HALVES,
+                out.imu_quaternion_wxyz, out.gyroscope_rad_s, out.accelerometer_m_s2, out.q,
+                out.dq, out.tau_est, out.foot_force)
+        return out
+    except (TypeError, ValueError):  # other arrays: NumPy's assignments convert or name them
+        pass
     out.imu_quaternion_wxyz[:] = imu["quaternion"]
     out.gyroscope_rad_s[:] = imu["gyroscope"]
     out.accelerometer_m_s2[:] = imu["accelerometer"]
