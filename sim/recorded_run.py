@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from sim.walking_plot import walked
 from wbc.core.errors import WbcError
 from wbc.model.description import JOINT_NAMES, LEGS
 
@@ -21,6 +22,9 @@ from wbc.model.description import JOINT_NAMES, LEGS
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 #: The channel a go2-wbc recording keeps its states on.
 STATE_TOPIC = "/wbc/state"
+#: What a walk's ``--log`` holds for ``/walking`` besides its ``commanded_velocity`` (logs
+#: written before these were added replay without ``/walking``, with a note).
+WALKING_ARRAYS = ("measured_velocity", "stance")
 
 
 class RecordingError(WbcError):
@@ -44,7 +48,9 @@ class RecordedRun:
     the run was simulated ``q_true``, ``v_true``, ``foot_target`` and ``foot_position`` (n, 3)
     of ``raised_leg``, ``contact_forces`` (n, 4, 3), ``com_margin_m``, ``tick_us``, ``phase``
     (the shape :func:`sim.run_recorder.write_plot` reads); a walk's ``commanded_velocity``
-    (n, 3) (NaN where nothing walked), which makes that the walking plot.
+    (n, 3) (NaN where nothing walked), which makes that the walking plot; a walk's ``--log``
+    also ``measured_velocity`` (n, 3) and ``stance`` (n, 4) (:data:`WALKING_ARRAYS`).
+    ``notes``: what the file lacks that a replay would show (said, never an error).
     """
 
     path: Path
@@ -56,6 +62,7 @@ class RecordedRun:
     messages: list[RawMessage] = field(default_factory=list)
     metadata: dict[str, str] = field(default_factory=dict)
     attachments: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def simulated(self) -> bool:
@@ -189,4 +196,10 @@ def _load_npz(path: Path) -> RecordedRun:
     if arrays["q"].ndim != 2 or arrays["q"].shape[1:] != (19,):
         raise RecordingError(f"{path}: q has shape {arrays['q'].shape}; expected (n, 19)")
     arrays["q"], arrays["v"] = arrays["q"].astype(float), arrays["v"].astype(float)
-    return RecordedRun(path, "npz", arrays)
+    run = RecordedRun(path, "npz", arrays)
+    lacking = [name for name in WALKING_ARRAYS if name not in arrays]
+    if lacking and walked(arrays):
+        run.notes.append(f"{path.name} walked but has no {' or '.join(lacking)} array (a --log "
+                         "written before they were logged): replayed without /walking; "
+                         "--plot draws the walk as before")
+    return run

@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -69,12 +69,8 @@ class RecordingHook:
         q, v = np.array(loop.context.q), np.array(loop.context.v)
         walking, walk = walking_motion(loop), None
         if walking is not None:
-            walk = WalkSample(
-                commanded=np.array(walking.commanded_velocity),
-                measured=np.array(walking.measured_velocity),
-                measured_true=heading_velocities(truth[0], truth[1]),
-                swing_legs=tuple(leg for leg, on in zip(LEGS, stance, strict=True) if not on),
-                loaded=tuple(bool(f > LOADED_FORCE_N) for f in forces[:, 2]))
+            walk = walk_sample(walking.commanded_velocity, walking.measured_velocity,
+                               stance=stance, q_true=truth[0], v_true=truth[1], forces=forces)
         recording.capture(Snapshot(
             t_s=loop.context.now_s, q=q, v=v,
             tau=np.array(out.tau), foot_target=targets, stance=stance,
@@ -84,3 +80,30 @@ class RecordingHook:
             q_true=np.array(truth[0]), v_true=np.array(truth[1]), force_n=forces,
             foot_position=feet, com_margin_m=margin, raised_leg=self.leg, walk=walk))
         recording.drain()
+
+
+def walk_sample(commanded: np.ndarray, measured: np.ndarray, *, stance: Sequence[bool],
+                q_true: np.ndarray | None = None, v_true: np.ndarray | None = None,
+                forces: np.ndarray | None = None) -> WalkSample:
+    """What a walking motion adds to a snapshot (``/walking``), from one tick's values: the
+    same whether the tick is live (:class:`RecordingHook`) or a ``--log`` row replayed
+    (:mod:`sim.run_replay`).
+
+    Args:
+        commanded: (3,) the motion's commanded velocity, heading frame: forward, lateral
+            [m/s], yaw rate [rad/s].
+        measured: (3,) the motion's measured velocity, the same frame.
+        stance: Per leg (``LEGS`` order), the controller's contact schedule's stance.
+        q_true, v_true: (19,), (18,) the simulator's true state at the instant the tick's
+            state describes (``None``: a robot's, no truth).
+        forces: (4, 3) the feet's measured contact forces [N] (``None``: none measured).
+    """
+    from sim.episode_metrics import LOADED_FORCE_N
+
+    return WalkSample(
+        commanded=np.array(commanded, dtype=float), measured=np.array(measured, dtype=float),
+        measured_true=(None if q_true is None or v_true is None
+                       else heading_velocities(q_true, v_true)),
+        swing_legs=tuple(leg for leg, on in zip(LEGS, stance, strict=True) if not on),
+        loaded=None if forces is None else tuple(bool(f > LOADED_FORCE_N)
+                                                 for f in forces[:, 2]))

@@ -41,7 +41,10 @@ class TickRecorder:
     ``estimate_contact`` the estimator's contact weight of each foot and ``estimate_flags``
     its fault flags (``wbc.estimation.state_estimator``'s constants; 0 with ``--state truth``);
     ``commanded_velocity`` the walking motion's commanded forward, lateral [m/s] and yaw rate
-    [rad/s] (:func:`sim.gait_view.walking_motion`; NaN while nothing walks); when
+    [rad/s] (:func:`sim.gait_view.walking_motion`; NaN while nothing walks) and
+    ``measured_velocity`` its measured one (the same frame and NaN); ``stance`` (N, 4) the
+    controller's contact schedule (``LEGS`` order, True: in stance); the last two with the
+    truth and the forces are what a replay's ``/walking`` is built from; when
     estimating, every sensor record the estimator read and its contact schedule
     (:class:`wbc.robot_io.sensor_log.SensorLog` reads them back).
     """
@@ -54,7 +57,7 @@ class TickRecorder:
         self.rows: dict[str, list[Any]] = {k: [] for k in (
             "t_s", "q", "v", "q_true", "v_true", "estimate_contact", "estimate_flags", "tau",
             "foot_target", "foot_position", "phase", "contact_forces", "com_margin_m",
-            "qp_ok", "tick_us", "commanded_velocity")}
+            "qp_ok", "tick_us", "commanded_velocity", "measured_velocity", "stance")}
         #: The truth at the instant the next tick's state describes (before its physics).
         self._truth = None if loop is None else loop.true_state()
 
@@ -99,6 +102,9 @@ class TickRecorder:
         walking = walking_motion(loop)
         row["commanded_velocity"].append(_NO_COMMAND if walking is None
                                          else np.array(walking.commanded_velocity))
+        row["measured_velocity"].append(_NO_COMMAND if walking is None
+                                        else np.array(walking.measured_velocity))
+        row["stance"].append(np.array(loop.controller.schedule.stance, dtype=bool))
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The recorded rows as arrays (N = ticks), plus the names that label them."""

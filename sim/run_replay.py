@@ -4,7 +4,9 @@ MuJoCo viewer and/or re-serves its channels live for Foxglove or Lichtblick.
 An MCAP recording is re-served as stored (every channel, its bytes untouched); an ``.npz``
 log is turned into the same channels as ``--mcap`` writes
 (:class:`~actions.robot.run_recording.RunRecording`) at
-:data:`~actions.robot.run_recording.DEFAULT_RATE_HZ`.
+:data:`~actions.robot.run_recording.DEFAULT_RATE_HZ`, ``/walking`` among them where a walk's
+log holds :data:`~sim.recorded_run.WALKING_ARRAYS` (built as a live run builds it:
+:func:`sim.recording_hook.walk_sample`).
 """
 
 from __future__ import annotations
@@ -16,8 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from actions.robot.run_recording import DEFAULT_RATE_HZ, RunRecording, Snapshot
-from sim.recorded_run import RecordedRun
+from actions.robot.run_channels import RunChannels
+from actions.robot.run_recording import DEFAULT_RATE_HZ, RunRecording, Snapshot, WalkSample
+from sim.recorded_run import WALKING_ARRAYS, RecordedRun
+from sim.recording_hook import walk_sample
 from wbc.core.errors import ConfigurationError
 from wbc.model.description import LEGS
 
@@ -45,6 +49,7 @@ class RunReplay:
         self.shown = self.sent = 0
 
     def play(self, *, view: Any = None, port: int | None = None,
+             channels: RunChannels | None = None,
              on_serving: Callable[[int], None] | None = None) -> None:
         """Play the run once: each state to ``view`` (a MuJoCo passive viewer handle on
         ``view.sim``'s model, or ``None``), the channels on ``port`` (``None``: not served).
@@ -52,11 +57,23 @@ class RunReplay:
         Args:
             view: ``(handle, simulator)``: the window and the simulator whose data it shows.
             port: Serve the channels on this local port (0: any free one).
+            channels: An ``.npz`` log's channels go here instead (an MCAP file's, say),
+                closed at the end; not with ``port``.
             on_serving: Told the port once the server runs.
+
+        Raises:
+            ConfigurationError: ``channels`` given with ``port``, or for an MCAP recording
+                (re-served as stored, by ``port``).
         """
         run = self.run
         relay = recording = None
-        if port is not None:
+        if channels is not None:
+            if port is not None or run.kind != "npz":
+                raise ConfigurationError(
+                    f"channels: take an .npz log's snapshots without a port; received "
+                    f"{run.kind} with port {port!r}")
+            recording = _npz_recording(run, channels)
+        elif port is not None:
             if run.kind == "mcap":
                 from actions.robot.run_channels import RelayChannels
 
@@ -64,7 +81,8 @@ class RunReplay:
                                       port=port)
                 served = relay.port
             else:
-                recording = _npz_recording(run, port)
+                recording = _npz_recording(run, RunChannels(
+                    port=port, metadata={"replay": str(run.path)}))
                 served = recording.channels.port or port
             if on_serving is not None:
                 on_serving(served)
@@ -83,6 +101,9 @@ class RunReplay:
         messages, next_message = run.messages, 0
         start_wall, start_t = self._clock(), (float(t[0]) if len(t) else 0.0)
         every = max(1, round(len(t) / max(run.duration_s, 1e-9) / DEFAULT_RATE_HZ))
+        if recording is not None:
+            for note in run.notes:
+                recording.line(f"replay: note: {note}", start_t, level="warning")
         for i, t_s in enumerate(t):
             wait = start_wall + (t_s - start_t) / self.speed - self._clock()
             if wait > 0.0:
@@ -114,12 +135,9 @@ class RunReplay:
                 self.sent += 1
 
 
-def _npz_recording(run: RecordedRun, port: int) -> RunRecording:
-    from actions.robot.run_channels import RunChannels
-
+def _npz_recording(run: RecordedRun, channels: RunChannels) -> RunRecording:
     t = run.arrays["t_s"]
     period = float(np.median(np.diff(t))) if len(t) > 1 else 1e-3
-    channels = RunChannels(port=port, metadata={"replay": str(run.path)})
     return RunRecording(channels, control_period_s=period,
                         rate_hz=min(DEFAULT_RATE_HZ, 1.0 / period))
 
@@ -134,11 +152,13 @@ def _snapshot(arrays: dict[str, np.ndarray], i: int) -> Snapshot:
         targets[LEGS.index(str(arrays.get("raised_leg", "FR")))] = target[i]
     tau = arrays.get("tau", arrays.get("tau_ff"))
     truth = "q_true" in arrays
+    # The schedule's stance where logged (a log before it: the feet without a target).
+    stance = arrays["stance"][i] if "stance" in arrays else ~np.isfinite(targets[:, 2])
     return Snapshot(
         t_s=float(arrays["t_s"][i]), q=arrays["q"][i].astype(float),
         v=arrays["v"][i].astype(float),
         tau=np.full(12, np.nan) if tau is None else tau[i].astype(float),
-        foot_target=targets, stance=tuple(bool(s) for s in ~np.isfinite(targets[:, 2])),
+        foot_target=targets, stance=tuple(bool(s) for s in stance),
         tick_us=float(arrays["tick_us"][i]) if "tick_us" in arrays else math.nan,
         qp_ok=bool(arrays["qp_ok"][i]) if "qp_ok" in arrays else True, status="",
         phase=str(arrays["phase"][i]) if "phase" in arrays else "",
@@ -146,4 +166,19 @@ def _snapshot(arrays: dict[str, np.ndarray], i: int) -> Snapshot:
         v_true=arrays["v_true"][i] if truth else None,
         force_n=arrays["contact_forces"][i] if "contact_forces" in arrays else None,
         com_margin_m=float(arrays["com_margin_m"][i]) if "com_margin_m" in arrays
-        else math.nan)
+        else math.nan, walk=_walk(arrays, i))
+
+
+def _walk(arrays: dict[str, np.ndarray], i: int) -> WalkSample | None:
+    """Row ``i``'s ``/walking`` sample: ``None`` where nothing walked or the log predates
+    :data:`~sim.recorded_run.WALKING_ARRAYS` (its note says so)."""
+    commanded = arrays.get("commanded_velocity")
+    if (commanded is None or not np.isfinite(commanded[i]).all()
+            or any(name not in arrays for name in WALKING_ARRAYS)):
+        return None
+    truth = "q_true" in arrays
+    forces = arrays.get("contact_forces")
+    return walk_sample(commanded[i], arrays["measured_velocity"][i], stance=arrays["stance"][i],
+                       q_true=arrays["q_true"][i] if truth else None,
+                       v_true=arrays["v_true"][i] if truth else None,
+                       forces=None if forces is None else forces[i])

@@ -66,6 +66,8 @@ def replay_run(args: argparse.Namespace, *, stream: IO[str] | None = None) -> in
         print(f"go2-wbc: replay: {err}", file=sys.stderr)
         return EXIT_USAGE
     say(run.describe())
+    for note in run.notes:
+        say(f"replay: note: {note}")
     if args.plot is not None:
         if not run.simulated:
             print(f"go2-wbc: replay: --plot: {run.path} holds no simulator truth (a robot's "
