@@ -100,8 +100,9 @@ class RunReplay:
         q_shown = arrays["q_true"] if run.simulated else arrays["q"]
         messages, next_message = run.messages, 0
         start_wall, start_t = self._clock(), (float(t[0]) if len(t) else 0.0)
-        every = max(1, round(len(t) / max(run.duration_s, 1e-9) / DEFAULT_RATE_HZ))
+        every = 1  # an .npz's rows are ticks: the recording's decimation of them
         if recording is not None:
+            every = recording.decimation
             for note in run.notes:
                 recording.line(f"replay: note: {note}", start_t, level="warning")
         for i, t_s in enumerate(t):
