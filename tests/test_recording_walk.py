@@ -40,6 +40,21 @@ def messages(path: Path, topic: str) -> list[tuple[int, dict]]:
                 make_reader(f).iter_messages(topics=[topic], log_time_order=True)]
 
 
+def kept_figures(monkeypatch: pytest.MonkeyPatch) -> list:
+    """The figures ``--plot`` draws from now on (``sim.run_plot.plot_figure``'s), kept."""
+    import sim.run_plot
+
+    figures = []
+    original = sim.run_plot.plot_figure
+
+    def keep(*args, **kwargs):
+        figures.append(original(*args, **kwargs))
+        return figures[-1]
+
+    monkeypatch.setattr(sim.run_plot, "plot_figure", keep)
+    return figures
+
+
 def schema_of(path: Path, topic: str) -> str | None:
     """The schema name of ``topic`` in the file's summary (``None``: no such channel)."""
     with path.open("rb") as f:
@@ -114,8 +129,6 @@ def walk_recording(tmp_path_factory) -> Path:
 @pytest.mark.slow
 def test_a_recorded_walk_carries_its_command_and_replays_as_the_walking_plot(
         walk_recording, tmp_path, monkeypatch, capsys):
-    import sim.run_plot
-
     walk = messages(walk_recording, "/walking")
     states = messages(walk_recording, "/wbc/state")
     commanded = np.array([[m["commanded"][k] for k in ("forward_mps", "lateral_mps",
@@ -150,14 +163,7 @@ def test_a_recorded_walk_carries_its_command_and_replays_as_the_walking_plot(
     assert any(m["swing_legs"] for _, m in walk)
     assert any(not all(m["loaded"]) for _, m in walk)
 
-    figures = []
-    original = sim.run_plot.plot_figure
-
-    def keep(*args, **kwargs):
-        figures.append(original(*args, **kwargs))
-        return figures[-1]
-
-    monkeypatch.setattr(sim.run_plot, "plot_figure", keep)
+    figures = kept_figures(monkeypatch)
     png = tmp_path / "walk.png"
     assert main(["replay", str(walk_recording), "--headless", "--plot", str(png)]) == 0
     assert png.stat().st_size > 10_000

@@ -17,7 +17,13 @@ from sim.episode_metrics import LOADED_FORCE_N
 from sim.gait_view import heading_rad, heading_velocities
 from sim.recorded_run import load_run
 from sim.run_replay import RunReplay
-from tests.test_recording_walk import FORWARD_MPS, WALK_S, messages, schema_of
+from tests.test_recording_walk import (
+    FORWARD_MPS,
+    WALK_S,
+    kept_figures,
+    messages,
+    schema_of,
+)
 from wbc.model.description import LEGS
 
 #: ``/walking``'s velocity fields, in the arrays' column order.
@@ -106,16 +112,7 @@ def test_a_walk_s_log_plots_the_walking_figure_of_its_mcap(walk, tmp_path, monke
     """``replay run.npz --plot``: the walking figure, its command the log's row by row and,
     at the MCAP's states, ``/walking``'s command (which the MCAP's plot draws:
     tests/test_recording_walk.py); its truth the MCAP's ``/wbc/state`` truth."""
-    import sim.run_plot
-
-    figures = []
-    original = sim.run_plot.plot_figure
-
-    def keep(*args, **kwargs):
-        figures.append(original(*args, **kwargs))
-        return figures[-1]
-
-    monkeypatch.setattr(sim.run_plot, "plot_figure", keep)
+    figures = kept_figures(monkeypatch)
     png = tmp_path / "npz.png"
     assert main(["replay", str(walk["npz"]), "--headless", "--plot", str(png)]) == 0
     assert png.stat().st_size > 10_000
