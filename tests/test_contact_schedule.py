@@ -131,3 +131,47 @@ def test_leg_lift_asks_the_schedule_for_ramps_and_never_sets_bounds_each_tick(de
     assert np.all(np.diff(unloading) <= 1e-12) and unloading[-1] < 1e-4 * unloading[0]
     assert np.max(-np.diff(unloading)) < 0.01 * unloading[0]
     assert schedule.stance_legs == list(LEGS) and schedule.support_legs() == list(LEGS)
+
+
+def test_the_change_counts_move_when_a_mode_or_the_support_may_have_changed():
+    # The controller skips re-reading the modes and the support feet while these stay equal.
+    s = schedule()
+    modes, support = s.mode_changes, s.support_changes
+    s.ramp_normal_force("FR", 0.0, 0.005)  # a bound set: the support may change, no mode
+    assert (s.mode_changes, s.support_changes) == (modes, support + 1)
+    seen = []
+    for _ in range(7):
+        before = s.support_changes
+        s.advance()
+        seen.append(s.support_changes - before)
+    # The ramp's first tick uses the bound set; the second leaves 250 N (FR no longer a
+    # support foot: counted once); the rest move it below 250 N without a count.
+    assert seen == [0, 1, 0, 0, 0, 0, 0] and s.support_legs() == ["FL", "RL", "RR"]
+    s.ramp_normal_force("FR", 250.0, 0.003)
+    support = s.support_changes
+    for _ in range(4):
+        s.advance()
+    assert s.support_changes == support + 1 and s.support_legs() == list(LEGS)  # reached 250
+    modes = s.mode_changes
+    s.set_swing("FR")
+    s.set_stance("FR")
+    s.reset()
+    assert s.mode_changes == modes + 3
+
+
+def test_the_controller_follows_the_support_feet_through_a_ramp(description):
+    # A ramped reload makes the foot a support corner again (the polygon's barrier back on),
+    # though the controller re-reads the support feet only when the schedule's count moved.
+    ctrl = WholeBodyController(description=description)
+    q = description.pose("standing")
+    ctrl.reset(q)
+    v = np.zeros(ctrl.model.nv)
+    ctrl.schedule.ramp_normal_force("FR", 0.0, 0.003)
+    for _ in range(5):
+        ctrl.step(q, v)
+    assert ctrl.support_legs() == ["FL", "RL", "RR"]
+    assert ctrl.balance.support_barrier.n_edges == 3
+    ctrl.schedule.ramp_normal_force("FR", 250.0, 0.003)
+    for _ in range(5):
+        ctrl.step(q, v)
+    assert ctrl.support_legs() == list(LEGS) and ctrl.balance.support_barrier.n_edges == 4

@@ -45,6 +45,8 @@ FAULT_LIMIT_TICKS = 50
 #: motion is done when its last foot is commanded loaded, and on the simulated GO2 that foot
 #: was seen to carry its load about 0.1 s later.
 REST_SPEED_MPS, SETTLE_S, MAX_SETTLE_S = 0.05, 0.15, 0.5
+#: The shared "goes on, no feedback" step result (what ``StepResult.running()`` returns).
+_GOES_ON: StepResult[WalkResult, WalkFeedback] = StepResult.running()
 
 
 class WalkingMotion(Protocol):
@@ -151,6 +153,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     def start(self, goal: WalkGoal, now_s: float) -> None:
         self.goal = goal
+        self._duration_s = float(goal.duration_s)  # read every tick (the aim)
         context = self.context
         self._stream = context.velocity_stream.claim(goal)
         context.walking = "the velocity stream (cmd_vel)" if self._stream else "a walk goal"
@@ -186,16 +189,19 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
                 self._begin(now_s)
             except WbcError as err:
                 return self._end("aborted", now_s, f"aborted: {err}")
-        walking = self.walking
         if not self._stopping:
-            problem = self._balance_problem()
+            # The balance watch's common case inline (clearly level and high: no angle).
+            q = context.q
+            x, y = q.item(3), q.item(4)
+            problem = "" if (1.0 - 2.0 * (x * x + y * y) > _LEVEL_COS
+                             and q.item(2) >= MIN_WALKING_HEIGHT_M) else self._balance_problem()
             if problem:
                 self._stop_for_abort(now_s, f"balance was being lost ({problem})")
             elif self._stream:
                 self._follow_stream(now_s)
             else:
                 self._check_aim(now_s)
-        phase = walking.advance(now_s)
+        phase = self.walking.advance(now_s)
         name = self._names.get(phase)
         if name is None:  # a phase not seen yet (a few per walk): its name, once
             name = self._names[phase] = str(getattr(phase, "name", phase)).lower()
@@ -204,7 +210,9 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
                 return self._end("aborted", now_s, (
                     f"aborted: not on four loaded feet {MAX_STOP_S:g} s after the stop"
                     + (f" ({self._abort_reason})" if self._abort_reason else "")))
-            return StepResult.running(self._feedback(now_s, name))
+            if not self._throttle.due(now_s, name):  # most ticks: no feedback
+                return _GOES_ON
+            return StepResult.running(self._make_feedback(now_s, name))
         if math.isnan(self._done_s):
             self._done_s = now_s
         settled_s = now_s - self._done_s
@@ -259,9 +267,9 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     def _check_aim(self, now_s: float) -> None:
         """Stop once the goal's duration has passed or its distance is travelled."""
-        goal = self.goal
-        progress = ((now_s - self._walk_start_s) / goal.duration_s if goal.duration_s > 0.0
-                    else self.walking.distance_m / goal.distance_m)
+        duration = self._duration_s
+        progress = ((now_s - self._walk_start_s) / duration if duration > 0.0
+                    else self.walking.distance_m / self.goal.distance_m)
         if not progress <= self._progress:  # it grew (NaN too: done, as min(1, NaN) said)
             self._progress = progress if progress < 1.0 else 1.0
         if self._progress >= 1.0 - 1e-9:
@@ -286,11 +294,8 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
             self._request_stop(now_s)
 
     def _balance_problem(self) -> str:
-        """Why the walk must stop ('' when it need not): a tilt or a sinking base."""
-        q = self.context.q
-        x, y = q.item(3), q.item(4)
-        if 1.0 - 2.0 * (x * x + y * y) > _LEVEL_COS and q.item(2) >= MIN_WALKING_HEIGHT_M:
-            return ""  # clearly level and high (every tick): no angle computed
+        """Why the walk must stop ('' when it need not): a tilt or a sinking base. (The
+        step tests the common case first: clearly level and high.)"""
         tilt = self.context.tilt_deg()
         if tilt > TILT_LIMIT_DEG:
             return f"base tilt {tilt:.1f} deg above {TILT_LIMIT_DEG:.0f} deg"
@@ -355,14 +360,19 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
         """Feedback at a phase change, else at the throttle's period."""
         if not self._throttle.due(now_s, phase) and not force:
             return None
+        return self._make_feedback(now_s, phase)
+
+    def _make_feedback(self, now_s: float, phase: str) -> WalkFeedback:
+        """The feedback now, in ``phase``."""
         walking = self.walking
         started = self._walk_started
-        velocity = walking.measured_velocity if started else np.zeros(3)
+        forward, lateral, yaw_rate = (walking.measured_velocity.tolist() if started
+                                      else (0.0, 0.0, 0.0))
         return WalkFeedback(
             phase=phase, progress=float(self._progress),
             gait_phase=float(walking.gait_phase) if started else 0.0,
-            distance_m=self._distance(), forward_mps=float(velocity[0]),
-            lateral_mps=float(velocity[1]), yaw_rate_radps=float(velocity[2]))
+            distance_m=self._distance(), forward_mps=float(forward),
+            lateral_mps=float(lateral), yaw_rate_radps=float(yaw_rate))
 
 
 def stream_goal(command: VelocityCommand) -> WalkGoal:

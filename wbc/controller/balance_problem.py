@@ -128,6 +128,8 @@ class BalanceProblem:
             self.builder.add_constraint(constraint)
         self._foot_rows = {leg: i for i, leg in enumerate(self.legs)}
         self._support: tuple[str, ...] | None = None
+        # The schedule's change counts when last followed (-1: follow it anew).
+        self._mode_changes = self._support_changes = -1
         self._held = False  # no target before the first hold (the controller's reset)
         #: Each foot's mode as last followed (:meth:`follow`), and the feet in the air.
         self.stance: list[bool] = []
@@ -164,6 +166,7 @@ class BalanceProblem:
             task.set_weight(self.config.weights.foot_weight)
         self._base_integral[:] = 0.0
         self._support = None
+        self._mode_changes = self._support_changes = -1
         self._polygon_due = True
 
     def start_swing(self, leg: str) -> None:
@@ -196,10 +199,15 @@ class BalanceProblem:
         that leaves the ground, once ``started``, is held where it is); the fully loaded
         feet are the support polygon's corners from the next tick. Returns whether any
         foot's mode changed (not only a bound)."""
-        stance = schedule.stance
-        if leg is not None and stance == self.stance:
+        changes = schedule.mode_changes
+        if leg is not None and changes == self._mode_changes:
             # Only a bound changed (a foot being unloaded or reloaded, every tick): the
             # layout stays; the polygon changes when the support set does.
+            self._follow_support(schedule)
+            return False
+        stance = schedule.stance
+        self._mode_changes = changes
+        if leg is not None and stance == self.stance:  # a mode set to what it was
             self._follow_support(schedule)
             return False
         for name, standing, was in zip(self.legs, stance, self.stance or stance):
@@ -210,10 +218,15 @@ class BalanceProblem:
         self.stance = stance
         self.swing_legs = [name for name, s in zip(self.legs, stance) if not s]
         self._support = None
+        self._support_changes = -1
         self._follow_support(schedule)
         return True
 
     def _follow_support(self, schedule: ContactSchedule) -> None:
+        changes = schedule.support_changes
+        if changes == self._support_changes:  # the same support feet as last followed
+            return
+        self._support_changes = changes
         support = tuple(schedule.support_legs())
         if support != self._support:
             self._support = support

@@ -6,6 +6,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numba import types
 
 from wbc.controller.controller_config import ContactSettings
 from wbc.core.errors import ConfigurationError
@@ -13,6 +14,9 @@ from wbc.core.min_jerk import min_jerk
 from wbc.core.validation import as_float, check_name
 
 _WORDS = {2: "two", 3: "three", 4: "four", 5: "five", 6: "six"}
+# min_jerk's compiled overload called directly: a ramp's every tick skips the dispatcher's
+# typing of its argument (about half of a call's cost).
+_MIN_JERK = min_jerk.overloads[(types.float64,)].entry_point
 
 
 @dataclass
@@ -27,7 +31,8 @@ class _Ramp:
     ticks: int = 0
 
     def value(self, elapsed_s: float) -> float:
-        return self.start_n + (self.end_n - self.start_n) * min_jerk(elapsed_s / self.duration_s)[0]
+        s = _MIN_JERK(elapsed_s / self.duration_s)[0]
+        return self.start_n + (self.end_n - self.start_n) * s
 
 
 class ContactSchedule:
@@ -64,6 +69,8 @@ class ContactSchedule:
         self._stance = np.ones(len(self.contacts), dtype=bool)
         self._bounds = np.full(len(self.contacts), settings.max_normal_force_n)
         self._ramps: dict[int, _Ramp] = {}
+        self._mode_changes = 0
+        self._support_changes = 0
 
     def set_listener(self, listener: Callable[[str], None] | None) -> None:
         """Who is told of each change to a foot (the controller that owns the schedule)."""
@@ -121,6 +128,19 @@ class ContactSchedule:
         """The normal-force bound [N] of a fully loaded stance foot."""
         return self.settings.max_normal_force_n
 
+    @property
+    def mode_changes(self) -> int:
+        """How many times a foot's mode may have changed (stance or swing; also counts a call
+        that set a mode it already had): equal counts, no change between them. What the
+        controller compares to skip re-reading the modes when only a bound moved."""
+        return self._mode_changes
+
+    @property
+    def support_changes(self) -> int:
+        """How many times :meth:`support_legs` may have changed (a mode set, a bound set, or a
+        ramped bound crossing the full bound): equal counts, the same support feet."""
+        return self._support_changes
+
     def is_ramping(self, leg: str) -> bool:
         """Whether a ramp of the foot's bound is under way."""
         return self._index(leg) in self._ramps
@@ -132,6 +152,8 @@ class ContactSchedule:
         self._ramps.clear()
         self._stance[:] = True
         self._bounds[:] = self.settings.max_normal_force_n
+        self._mode_changes += 1
+        self._support_changes += 1
         for leg in self.contacts:
             self._changed(leg)
 
@@ -148,6 +170,7 @@ class ContactSchedule:
                 f"leg: {leg} is in swing; call set_stance({leg!r}) before loading it")
         self._ramps.pop(i, None)
         self._bounds[i] = value
+        self._support_changes += 1
         self._changed(leg)
 
     def ramp_normal_force(self, leg: str, to_n: float, duration_s: float, *,
@@ -176,6 +199,7 @@ class ContactSchedule:
         ramp = _Ramp(start, end, duration, elapsed)
         self._ramps[i] = ramp
         self._bounds[i] = ramp.value(elapsed)
+        self._support_changes += 1
         self._changed(leg)
 
     def set_swing(self, leg: str) -> None:
@@ -193,6 +217,8 @@ class ContactSchedule:
         self._ramps.pop(i, None)
         self._stance[i] = False
         self._bounds[i] = 0.0
+        self._mode_changes += 1
+        self._support_changes += 1
         self._changed(leg)
 
     def set_stance(self, leg: str, *, max_normal_force_n: float = 0.0) -> None:
@@ -205,25 +231,34 @@ class ContactSchedule:
         self._ramps.pop(i, None)
         self._stance[i] = True
         self._bounds[i] = value
+        self._mode_changes += 1
+        self._support_changes += 1
         self._changed(leg)
 
     def advance(self) -> None:
         """Move every ramp on by one tick (the controller calls it once per tick, before
         it reads the bounds): a ramp asked for since the last tick is used as it was."""
-        if not self._ramps:
+        ramps = self._ramps
+        if not ramps:
             return
-        dt = self.control_period_s
-        for i, ramp in list(self._ramps.items()):
+        dt, bounds, listener = self.control_period_s, self._bounds, self._listener
+        full = self.settings.max_normal_force_n
+        for i, ramp in list(ramps.items()):
             ramp.ticks += 1
             if ramp.ticks == 1:
                 continue
             elapsed = ramp.elapsed_s + (ramp.ticks - 1) * dt
             if elapsed >= ramp.duration_s:
-                self._bounds[i] = ramp.end_n
-                del self._ramps[i]
+                value = ramp.end_n
+                del ramps[i]
             else:
-                self._bounds[i] = ramp.value(elapsed)
-            self._changed(self.contacts[i])
+                value = ramp.start_n + (ramp.end_n - ramp.start_n) * _MIN_JERK(
+                    elapsed / ramp.duration_s)[0]  # ramp.value(elapsed), inline
+            if (bounds.item(i) >= full) != (value >= full):  # a support foot more or less
+                self._support_changes += 1
+            bounds[i] = value
+            if listener is not None:  # _changed, inline
+                listener(self.contacts[i])
 
     # ------------------------------------------------------------------ helpers
 

@@ -109,7 +109,10 @@ class ProblemBuilder:
 
     def set_active(self, task: Task, active: bool) -> None:
         """Put a registered task in the QP or take it out (kept registered, not updated)."""
-        self._active[task] = bool(active)
+        active = bool(active)
+        if self._active.get(task) is active:  # registered and already so: nothing changes
+            return
+        self._active[task] = active
         self._stack.set_active(task, bool(active))
         self._active_tasks = tuple(t for t in self.tasks if self._active[t])
 

@@ -266,9 +266,14 @@ class WholeBodyController(TaskComposition):
 
     def _contact_changed(self, leg: str | None = None) -> None:
         """The schedule's listener: a foot's mode or bound changed (every foot: ``None``)."""
-        if self.balance.follow(self.schedule, leg, started=self._q is not None):
-            for joints, standing in zip(self._leg_joints, self.balance.stance):
-                self.motor.set_stance(joints, standing)
+        balance = self.balance
+        before = balance.stance  # follow replaces the list when a mode changed
+        if balance.follow(self.schedule, leg, started=self._q is not None):
+            every = leg is None or len(before) != len(balance.stance)
+            for joints, standing, was in zip(self._leg_joints, balance.stance,
+                                             balance.stance if every else before):
+                if every or standing != was:  # the legs whose mode changed (each, at a reset)
+                    self.motor.set_stance(joints, standing)
 
     # ------------------------------------------------------------------ the tick
 

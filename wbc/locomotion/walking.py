@@ -249,11 +249,13 @@ class Walking:
 
     def advance(self, now_s: float) -> WalkPhase:
         """Set the controller's references and contacts for time ``now_s`` [s]."""
-        if self.phase is None:
-            raise ConfigurationError("Walking.advance: call start(now_s) first")
-        dt = max(now_s - self._last_s, 0.0)
-        self._last_s = now_s
         phase = self.phase
+        if phase is None:
+            raise ConfigurationError("Walking.advance: call start(now_s) first")
+        dt = now_s - self._last_s
+        if dt < 0.0:  # max(dt, 0.0) without the builtin's call
+            dt = 0.0
+        self._last_s = now_s
         if phase is _DONE:
             self._measure(dt)
             return phase
