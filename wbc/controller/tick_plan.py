@@ -174,6 +174,8 @@ class TickPlan:
         self._programs: dict[tuple[Task, ...], CompiledProgram] = {}
         self._last_program: tuple[tuple[Task, ...] | None, CompiledProgram | None] = (None, None)
         self._tau_prev = tau_prev
+        #: The force columns carried over from each layout switched from (:meth:`carry_over`).
+        self._carried: dict[VariableLayout, list[tuple[slice, slice]]] = {}
         #: The torques [N m] and forces (contacts, 3) [N] of the last solve in compiled code.
         self.tau, self.forces = np.zeros(nv - 6), np.zeros((len(layout.contacts), 3))
         self._solve: tuple[QpBackend | None, CompiledProgram | None, int] = (None, None, -1)
@@ -286,10 +288,15 @@ class TickPlan:
         self.x_prev[:] = 0.0
         self.x_prev[:nv] = previous.x_prev[:nv]
         self.x[:] = 0.0
-        for contact in self.layout.force_contacts:
-            old, new = previous.layout.force_slice(contact), self.layout.force_slice(contact)
-            if old is not None and new is not None:
-                self.x_prev[new] = previous.x_prev[old]
+        pairs = self._carried.get(previous.layout)
+        if pairs is None:  # once per previous layout: a trot switches four times a second
+            pairs = self._carried[previous.layout] = [
+                (new, old) for old, new in (
+                    (previous.layout.force_slice(contact), self.layout.force_slice(contact))
+                    for contact in self.layout.force_contacts)
+                if old is not None and new is not None]
+        for new, old in pairs:
+            self.x_prev[new] = previous.x_prev[old]
 
 
 def _task_step(task: Task, kinematics: RobotKinematics) -> Step:
