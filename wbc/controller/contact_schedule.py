@@ -241,7 +241,7 @@ class ContactSchedule:
         ramps = self._ramps
         if not ramps:
             return
-        dt, bounds, listener = self.control_period_s, self._bounds, self._listener
+        dt, bounds = self.control_period_s, self._bounds
         full = self.settings.max_normal_force_n
         for i, ramp in list(ramps.items()):
             ramp.ticks += 1
@@ -252,13 +252,11 @@ class ContactSchedule:
                 value = ramp.end_n
                 del ramps[i]
             else:
-                value = ramp.start_n + (ramp.end_n - ramp.start_n) * _MIN_JERK(
-                    elapsed / ramp.duration_s)[0]  # ramp.value(elapsed), inline
+                value = ramp.value(elapsed)
             if (bounds.item(i) >= full) != (value >= full):  # a support foot more or less
                 self._support_changes += 1
             bounds[i] = value
-            if listener is not None:  # _changed, inline
-                listener(self.contacts[i])
+            self._changed(self.contacts[i])
 
     # ------------------------------------------------------------------ helpers
 
