@@ -153,7 +153,6 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     def start(self, goal: WalkGoal, now_s: float) -> None:
         self.goal = goal
-        self._duration_s = float(goal.duration_s)  # read every tick (the aim)
         context = self.context
         self._stream = context.velocity_stream.claim(goal)
         context.walking = "the velocity stream (cmd_vel)" if self._stream else "a walk goal"
@@ -267,7 +266,7 @@ class WalkBehaviour(Behaviour[WalkGoal, WalkResult, WalkFeedback]):
 
     def _check_aim(self, now_s: float) -> None:
         """Stop once the goal's duration has passed or its distance is travelled."""
-        duration = self._duration_s
+        duration = self.goal.duration_s
         progress = ((now_s - self._walk_start_s) / duration if duration > 0.0
                     else self.walking.distance_m / self.goal.distance_m)
         if not progress <= self._progress:  # it grew (NaN too: done, as min(1, NaN) said)
